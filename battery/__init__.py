@@ -1,0 +1,1 @@
+"""Battery: chargers, charging policy, charge sessions and battery history (issue 7)."""

@@ -1,0 +1,95 @@
+"""Views of a LiveVehicle: a database row for the flusher and a browser row for the live page."""
+
+from typing import Any
+
+import msgspec
+
+from control.execution import LayoutIndex
+from control.live import LiveVehicle
+
+# 3.0 spells some states with an underscore; the registry stores the 2.x spelling.
+_CONNECTION_NAMES = {"CONNECTION_BROKEN": "CONNECTIONBROKEN", "HIBERNATING": "ONLINE"}
+
+
+def row(vehicle: LiveVehicle) -> dict[str, Any]:
+    """The `robots.Vehicle` snapshot fields (robots.services.SNAPSHOT_FIELDS) plus `pk`."""
+    state, position = vehicle.state, vehicle.visual_position
+    data: dict[str, Any] = {
+        "pk": vehicle.pk,
+        "connection": _CONNECTION_NAMES.get(vehicle.connection, vehicle.connection),
+        "protocol_version": vehicle.version,
+        "interface_name": vehicle.interface_name,
+        "last_seen": vehicle.last_seen,
+        "map_id": position.map_id if position else "",
+        "x": position.x if position else None,
+        "y": position.y if position else None,
+        "theta": position.theta if position else None,
+        "position_initialized": bool(position and position.position_initialized),
+    }
+    if state is None:
+        return data | {"battery_charge": None, "charging": False, "driving": False,
+                       "paused": False, "operating_mode": "", "errors": [], "loads": [],
+                       "order_id": "", "order_update_id": None, "last_node_id": "",
+                       "last_node_sequence_id": None}
+    return data | {
+        "battery_charge": state.battery_state.battery_charge,
+        "charging": state.battery_state.charging,
+        "driving": state.driving,
+        "paused": bool(state.paused),
+        "operating_mode": str(state.operating_mode),
+        "errors": msgspec.to_builtins(state.errors),
+        "loads": msgspec.to_builtins(state.loads or []),
+        "order_id": state.order_id,
+        "order_update_id": state.order_update_id,
+        "last_node_id": state.last_node_id,
+        "last_node_sequence_id": state.last_node_sequence_id,
+    }
+
+
+def status_label(vehicle: LiveVehicle) -> str:
+    """One word for the live page's colour: offline, error, paused, charging, driving, busy, idle."""
+    state = vehicle.state
+    if vehicle.connection != "ONLINE" or state is None:
+        return "offline"
+    if any(str(e.error_level) == "FATAL" for e in state.errors):
+        return "error"
+    if state.paused:
+        return "paused"
+    if state.battery_state.charging:
+        return "charging"
+    if state.driving:
+        return "driving"
+    return "idle" if vehicle.is_idle else "busy"
+
+
+def browser_row(vehicle: LiveVehicle, layouts: dict[str, LayoutIndex]) -> dict[str, Any]:
+    """What the live page draws and lists for one vehicle, including its remaining route."""
+    state, position = vehicle.state, vehicle.visual_position
+    base: list[list[float]] = []
+    horizon: list[list[float]] = []
+    if state is not None and position is not None and position.map_id in layouts:
+        nodes = layouts[position.map_id].nodes
+        for node_state in state.node_states:
+            place = nodes.get(node_state.node_id)
+            if place is not None:
+                (base if node_state.released else horizon).append([place.x, place.y])
+    return {
+        "id": vehicle.pk,
+        "manufacturer": vehicle.manufacturer,
+        "serial": vehicle.serial_number,
+        "status": status_label(vehicle),
+        "connection": vehicle.connection,
+        "x": position.x if position else None,
+        "y": position.y if position else None,
+        "theta": position.theta if position else None,
+        "map": position.map_id if position else None,
+        "battery": round(state.battery_state.battery_charge, 1) if state else None,
+        "mode": str(state.operating_mode) if state else None,
+        "order": state.order_id if state else None,
+        "transport_order": vehicle.execution.transport_order_id if vehicle.execution else None,
+        "last_node": state.last_node_id if state else None,
+        "loaded": bool(state and state.loads),
+        "errors": [f"{e.error_level} {e.error_type}" for e in state.errors] if state else [],
+        "base": base,
+        "horizon": horizon,
+    }

@@ -1,0 +1,92 @@
+"""Transport orders from ERP/WMS and their event timeline."""
+
+from django.conf import settings
+from django.db import models
+
+
+class TransportOrder(models.Model):
+    """Move a load from one station to another: pick at `source`, drop at `destination`.
+
+    Dispatch assigns a vehicle and a route (node ids from the vehicle's node via the source to
+    the destination); `control` sends it as a VDA 5050 order (`vda_order_id`) and tracks it to
+    the end from the vehicle's state.
+    """
+
+    class Status(models.TextChoices):
+        NEW = "NEW", "new"
+        ASSIGNED = "ASSIGNED", "assigned"
+        IN_PROGRESS = "IN_PROGRESS", "in progress"
+        FINISHED = "FINISHED", "finished"
+        FAILED = "FAILED", "failed"
+        CANCELLED = "CANCELLED", "cancelled"
+
+    ACTIVE_STATUSES = (Status.ASSIGNED, Status.IN_PROGRESS)
+    OPEN_STATUSES = (Status.NEW, Status.ASSIGNED, Status.IN_PROGRESS)
+
+    source = models.ForeignKey("maps.Station", on_delete=models.PROTECT, related_name="+")
+    destination = models.ForeignKey("maps.Station", on_delete=models.PROTECT, related_name="+")
+    load_id = models.CharField(max_length=100, blank=True)
+    load_type = models.CharField(max_length=100, blank=True, default="EPAL")
+    priority = models.IntegerField(default=0, help_text="higher goes first")
+    external_ref = models.CharField(max_length=200, blank=True)
+    status = models.CharField(max_length=20, choices=Status.choices, default=Status.NEW,
+                              db_index=True)
+    vehicle = models.ForeignKey("robots.Vehicle", null=True, blank=True,
+                                on_delete=models.PROTECT, related_name="transport_orders")
+    route = models.JSONField(default=list, blank=True, help_text="node ids to drive")
+    vda_order_id = models.CharField(max_length=100, blank=True)
+    failure_reason = models.TextField(blank=True)
+    cancel_requested = models.BooleanField(default=False)
+    created_by = models.ForeignKey(settings.AUTH_USER_MODEL, null=True, blank=True,
+                                   on_delete=models.SET_NULL, related_name="+")
+    created_at = models.DateTimeField(auto_now_add=True)
+    assigned_at = models.DateTimeField(null=True, blank=True)
+    started_at = models.DateTimeField(null=True, blank=True)
+    finished_at = models.DateTimeField(null=True, blank=True)
+    updated_at = models.DateTimeField(auto_now=True)
+
+    class Meta:
+        ordering = ["-created_at"]
+        constraints = [
+            # A vehicle drives one transport order at a time; the database enforces it so that
+            # two concurrent dispatch runs can never double-book a vehicle.
+            models.UniqueConstraint(
+                fields=["vehicle"],
+                condition=models.Q(status__in=["ASSIGNED", "IN_PROGRESS"]),
+                name="one_active_order_per_vehicle",
+            ),
+            models.CheckConstraint(condition=~models.Q(source=models.F("destination")),
+                                   name="source_is_not_destination"),
+        ]
+
+    def __str__(self) -> str:
+        return f"TO-{self.pk} {self.source_id}→{self.destination_id} ({self.status})"
+
+    @property
+    def is_open(self) -> bool:
+        return self.status in self.OPEN_STATUSES
+
+
+class OrderEvent(models.Model):
+    """One entry of a transport order's timeline: what happened, when, and who or why."""
+
+    class Kind(models.TextChoices):
+        CREATED = "CREATED", "created"
+        ASSIGNED = "ASSIGNED", "assigned"
+        STARTED = "STARTED", "started"
+        STEP_REACHED = "STEP_REACHED", "step reached"
+        FINISHED = "FINISHED", "finished"
+        FAILED = "FAILED", "failed"
+        CANCEL_REQUESTED = "CANCEL_REQUESTED", "cancel requested"
+        CANCELLED = "CANCELLED", "cancelled"
+
+    order = models.ForeignKey(TransportOrder, on_delete=models.CASCADE, related_name="events")
+    kind = models.CharField(max_length=20, choices=Kind.choices)
+    at = models.DateTimeField(auto_now_add=True)
+    detail = models.JSONField(default=dict, blank=True)
+
+    class Meta:
+        ordering = ["order", "at", "pk"]
+
+    def __str__(self) -> str:
+        return f"{self.order_id} {self.kind}"

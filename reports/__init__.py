@@ -1,0 +1,1 @@
+"""Reports: KPIs, charts and CSV exports for managers (issue 9)."""

@@ -1,0 +1,1 @@
+"""Models: none yet; see the package docstring for what this app will own."""
