@@ -69,8 +69,9 @@ class OrderExecution:
     def plan(cls, *, transport_order_id: int, vda_order_id: str, route: list[str],
              pickup: str) -> "OrderExecution":
         return cls(transport_order_id=transport_order_id, vda_order_id=vda_order_id, route=route,
-                   pick_index=route.index(pickup), pick_action_id=f"pick-{uuid.uuid4()}",
-                   drop_action_id=f"drop-{uuid.uuid4()}")
+                   pick_index=route.index(pickup),
+                   # Derived from the order id, so a restarted control recognises them.
+                   pick_action_id=f"{vda_order_id}-pick", drop_action_id=f"{vda_order_id}-drop")
 
     @property
     def action_steps(self) -> dict[str, str]:
