@@ -83,7 +83,9 @@ class Controller:
         self.counters: Counter[str] = Counter()
         self.lock = threading.RLock()
         self._progress: list[Progress] = []
-        self._pending_orders: dict[int, ActiveOrder] = {}
+        # Orders that ended in memory; the database may list them as active until the next
+        # flush, and sync must not adopt them again.
+        self._ended: set[int] = set()
 
     def load(self) -> None:
         """Rebuild from the database: layouts and known vehicles (their state comes over MQTT)."""
@@ -138,6 +140,7 @@ class Controller:
             self._send_cancel(vehicle, execution)  # the vehicle keeps its order until cancelled
         self._progress.extend(progress)
         if execution.phase is Phase.DONE:
+            self._ended.add(execution.transport_order_id)
             vehicle.execution = None
 
     def on_connection(self, vehicle: LiveVehicle, message: vda5050.Connection) -> None:
@@ -169,8 +172,10 @@ class Controller:
     def sync(self, orders: list[ActiveOrder]) -> None:
         """Start, adopt, resend or cancel the assigned orders read from the database."""
         with self.lock:
-            self._pending_orders = {o.transport_order_id: o for o in orders}
+            self._ended &= {o.transport_order_id for o in orders}  # forget what the DB closed
             for order in orders:
+                if order.transport_order_id in self._ended:
+                    continue
                 vehicle = self.fleet.by_pk(order.vehicle_pk)
                 if vehicle is not None:
                     self._sync_one(vehicle, order)
@@ -202,17 +207,21 @@ class Controller:
             self._progress.extend(execution.observe(state))
             return execution
         if order.cancel_requested:
-            self._progress.append(Progress("cancelled", order.transport_order_id))
+            self._end(Progress("cancelled", order.transport_order_id))
             return None
         if not (vehicle.is_available and vehicle.is_idle):
             return None
         if state.last_node_id != order.route[0]:
-            self._progress.append(Progress("failed", order.transport_order_id, {
+            self._end(Progress("failed", order.transport_order_id, {
                 "reason": f"vehicle is at {state.last_node_id}, route starts at {order.route[0]}"}))
             return None
         vehicle.execution = execution
         self._publish_order(vehicle, order, execution)
         return execution
+
+    def _end(self, progress: Progress) -> None:
+        self._progress.append(progress)
+        self._ended.add(progress.order_id)
 
     def _publish_order(self, vehicle: LiveVehicle, order: ActiveOrder,
                        execution: OrderExecution) -> None:

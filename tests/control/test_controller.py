@@ -147,3 +147,17 @@ def test_other_interfaces_and_own_echoes_are_ignored(controller) -> None:
     controller.handle_message("other/v2/sim/AGV-1/state", state())
     controller.handle_message("uagv/v2/sim/AGV-1/order", b"{}")
     assert controller.fleet.by_pk(1).state is None
+
+
+def test_an_order_finished_in_memory_is_not_adopted_again_before_the_flush(controller) -> None:
+    controller.handle_message(STATE_TOPIC, state())
+    controller.sync([order()])
+    controller.handle_message(STATE_TOPIC, state(header_id=2, order_id="TO-7", last_node="d",
+                                                 actions=(("TO-7-pick", "FINISHED"),
+                                                          ("TO-7-drop", "FINISHED"))))
+
+    controller.sync([order()])  # the database still lists it as active
+    controller.flush()
+
+    assert [p.kind for p in controller.store.batches[-1].progress] == [
+        "started", "step", "step", "finished"]
