@@ -1,0 +1,23 @@
+"""Framework-free VDA 5050 vehicle simulator: N virtual AGVs over MQTT in one process.
+
+Only the :mod:`vda5050` package, paho-mqtt and the standard library may be imported here
+(an import-linter contract forbids Django, Celery, Channels and the project's apps).
+"""
+
+from __future__ import annotations
+
+from simulator.fleet import FleetConfig, SimulatedFleet
+from simulator.layout import Layout, LayoutError, LayoutNode, load_layout
+from simulator.vehicle import StartPose, VehicleConfig, VirtualVehicle
+
+__all__ = [
+    "FleetConfig",
+    "SimulatedFleet",
+    "Layout",
+    "LayoutError",
+    "LayoutNode",
+    "StartPose",
+    "VehicleConfig",
+    "VirtualVehicle",
+    "load_layout",
+]

@@ -1,0 +1,136 @@
+"""Action catalogue of the simulated vehicle and the runtime record of one action.
+
+The catalogue is the single source of truth for both the factsheet
+(``protocolFeatures.agvActions``) and order validation, so the vehicle never accepts an
+action it does not advertise and never advertises one it cannot execute.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from vda5050 import Action, action_params
+from vda5050.enums import ActionScope, ActionStatus, BlockingType, ValueDataType
+
+I = ActionScope.INSTANT  # noqa: E741 - short aliases keep the catalogue table readable
+N = ActionScope.NODE
+ALL_BLOCKING = (BlockingType.NONE, BlockingType.SOFT, BlockingType.HARD)
+STANDING = (BlockingType.SOFT, BlockingType.HARD)
+HARD = (BlockingType.HARD,)
+
+TERMINAL = frozenset({ActionStatus.FINISHED, ActionStatus.FAILED})
+
+
+@dataclass(frozen=True, slots=True)
+class ParamSpec:
+    """One declared action parameter."""
+
+    key: str
+    data_type: ValueDataType
+    optional: bool
+    description: str
+
+
+@dataclass(frozen=True, slots=True)
+class ActionSpec:
+    """What the simulator supports for one action type."""
+
+    action_type: str
+    scopes: tuple[ActionScope, ...]
+    blocking_types: tuple[BlockingType, ...]
+    description: str
+    duration: float = 0.0
+    """Simulated seconds the action spends RUNNING when executed as a node action."""
+    parameters: tuple[ParamSpec, ...] = ()
+
+    @property
+    def required_keys(self) -> frozenset[str]:
+        """Parameter keys the master control must send."""
+        return frozenset(p.key for p in self.parameters if not p.optional)
+
+
+def _str(key: str, description: str, optional: bool = True) -> ParamSpec:
+    return ParamSpec(key, ValueDataType.STRING, optional, description)
+
+
+def _num(key: str, description: str, optional: bool = False) -> ParamSpec:
+    return ParamSpec(key, ValueDataType.NUMBER, optional, description)
+
+
+_LOAD_PARAMS = (
+    _str("loadId", "Id of the load; copied into state.loads."),
+    _str("loadType", "Type of the load; copied into state.loads."),
+    _str("stationType", "Informational only."),
+    _str("stationName", "Informational only."),
+    _str("lhd", "Load handling device; copied into loads[].loadPosition."),
+)
+_INIT_PARAMS = (
+    _num("x", "x in metres."),
+    _num("y", "y in metres."),
+    _num("theta", "Heading in radians."),
+    _str("mapId", "Map of the new position; must be the simulator's map.", optional=False),
+    _str("lastNodeId", "Node the vehicle now stands on.", optional=False),
+)
+
+CATALOGUE: dict[str, ActionSpec] = {
+    spec.action_type: spec
+    for spec in (
+        ActionSpec("pick", (N,), STANDING, "Pick up a load (sets state.loads).", 2.0, _LOAD_PARAMS),
+        ActionSpec("drop", (N,), STANDING, "Drop the load (state.loads = []).", 2.0, _LOAD_PARAMS),
+        ActionSpec("startCharging", (I, N), STANDING, "Connect the charger.", 1.0),
+        ActionSpec("stopCharging", (I, N), STANDING, "Disconnect the charger.", 1.0),
+        ActionSpec("cancelOrder", (I,), ALL_BLOCKING, "Stop at the next node, drop the order."),
+        ActionSpec("startPause", (I,), ALL_BLOCKING, "Pause driving and actions."),
+        ActionSpec("stopPause", (I,), ALL_BLOCKING, "Resume after startPause."),
+        ActionSpec("stateRequest", (I,), ALL_BLOCKING, "Publish a state message now."),
+        ActionSpec("factsheetRequest", (I,), ALL_BLOCKING, "Publish the factsheet now."),
+        ActionSpec("initPosition", (I, N), HARD, "Set pose and lastNodeId.", 0.5, _INIT_PARAMS),
+    )
+}
+
+
+def check_action(action: Action, scope: ActionScope) -> str | None:
+    """Return why ``action`` cannot be used in ``scope``, or ``None`` if it is acceptable."""
+    spec = CATALOGUE.get(action.action_type)
+    if spec is None:
+        return f"unsupported actionType {action.action_type!r}"
+    if scope not in spec.scopes:
+        return f"actionType {action.action_type!r} not supported in scope {scope}"
+    if scope is not ActionScope.INSTANT and action.blocking_type not in spec.blocking_types:
+        return f"blockingType {action.blocking_type} not supported for {action.action_type!r}"
+    missing = spec.required_keys - action_params(action).keys()
+    if missing:
+        return f"{action.action_type!r} lacks parameters {sorted(missing)}"
+    return None
+
+
+@dataclass(slots=True)
+class ActionRun:
+    """Runtime record of one order or instant action, reported in ``actionStates``."""
+
+    action: Action
+    node_key: tuple[str, int] | None = None
+    """(nodeId, sequenceId) of the node that triggers this order action; None for instant."""
+    status: ActionStatus = ActionStatus.WAITING
+    remaining: float = 0.0
+    result: str | None = None
+
+    @property
+    def action_id(self) -> str:
+        """The action's id."""
+        return self.action.action_id
+
+    @property
+    def terminal(self) -> bool:
+        """True once FINISHED or FAILED."""
+        return self.status in TERMINAL
+
+    @property
+    def active(self) -> bool:
+        """True while INITIALIZING or RUNNING."""
+        return self.status in (ActionStatus.INITIALIZING, ActionStatus.RUNNING)
+
+    def fail(self, reason: str) -> None:
+        """Mark the action FAILED with a human-readable reason."""
+        self.status = ActionStatus.FAILED
+        self.result = reason

@@ -1,0 +1,239 @@
+"""Execution of order (node) actions and instant actions for one virtual vehicle.
+
+Node actions run in list order once their node is reached and honour their blockingType
+(REFERENCE §3 E.24): NONE runs in parallel and lets the vehicle drive, SOFT runs in
+parallel but stops driving, HARD runs alone and stops driving. Each status change
+(WAITING → INITIALIZING → RUNNING → FINISHED/FAILED) happens on its own tick so that every
+intermediate status can appear in at least one published state.
+
+Instant actions other than ``cancelOrder`` take effect immediately when received.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
+
+from simulator.actions import CATALOGUE, ActionRun, check_action
+from vda5050 import Action, Load, ParameterValue, action_params
+from vda5050.enums import ActionScope, ActionStatus, BlockingType
+
+if TYPE_CHECKING:
+    from simulator.orders import Step
+    from simulator.vehicle import VirtualVehicle
+
+_STOPPING = (BlockingType.SOFT, BlockingType.HARD)
+
+
+class ActionExecutor:
+    """Tracks ``actionStates`` and runs actions against its vehicle."""
+
+    def __init__(self, vehicle: VirtualVehicle) -> None:
+        self._vehicle = vehicle
+        self._runs: dict[str, ActionRun] = {}
+        self._queue: list[ActionRun] = []  # triggered node actions, in execution order
+        self._cancels: list[ActionRun] = []  # cancelOrder actions waiting for the stop
+
+    # ------------------------------------------------------------------ queries
+    def reported(self) -> list[ActionRun]:
+        """Runs in the order they appear in ``actionStates``."""
+        return list(self._runs.values())
+
+    def get(self, action_id: str) -> ActionRun | None:
+        """The run of ``action_id``, if known."""
+        return self._runs.get(action_id)
+
+    @property
+    def all_terminal(self) -> bool:
+        """Every reported action is FINISHED or FAILED."""
+        return all(run.terminal for run in self._runs.values())
+
+    @property
+    def order_busy(self) -> bool:
+        """Some order action is not terminal yet."""
+        return any(run.node_key is not None and not run.terminal for run in self._runs.values())
+
+    @property
+    def blocks_driving(self) -> bool:
+        """A triggered SOFT/HARD action is not finished, so the vehicle must stand still."""
+        return any(
+            not run.terminal and run.action.blocking_type in _STOPPING for run in self._queue
+        )
+
+    # ------------------------------------------------------------------ order bookkeeping
+    def reset_for_new_order(self, steps: Iterable[Step]) -> None:
+        """2.x: actionStates restart with a new order; unfinished instant actions stay."""
+        self._runs = {k: r for k, r in self._runs.items() if not r.terminal and r.node_key is None}
+        self._queue = []
+        self._register(steps)
+
+    def replace_horizon(self, dropped: Iterable[Step], added: Iterable[Step]) -> None:
+        """Order update: forget the old horizon's (still WAITING) actions, add the new ones."""
+        for step in dropped:
+            for action in step.node.actions:
+                run = self._runs.get(action.action_id)
+                if run is not None and run.status is ActionStatus.WAITING:
+                    del self._runs[action.action_id]
+        self._register(added)
+
+    def _register(self, steps: Iterable[Step]) -> None:
+        for step in steps:
+            for action in step.node.actions:
+                self._runs[action.action_id] = ActionRun(action=action, node_key=step.key)
+
+    def trigger_node(self, key: tuple[str, int]) -> None:
+        """The vehicle reached node ``key``: queue its WAITING actions in list order."""
+        self._queue += [
+            run
+            for run in self._runs.values()
+            if run.node_key == key and run.status is ActionStatus.WAITING
+        ]
+
+    # ------------------------------------------------------------------ simulation
+    def advance(self, sim_dt: float) -> None:
+        """Move every triggered action on by at most one status per tick."""
+        hard_active = any_active = False
+        for run in self._queue:
+            hard = run.action.blocking_type is BlockingType.HARD
+            if run.status is ActionStatus.WAITING:
+                # List order is execution order: a blocked action blocks all after it.
+                if hard_active or (hard and any_active):
+                    break
+                run.status = ActionStatus.INITIALIZING
+                self._vehicle.mark_state_due()
+            elif run.status is ActionStatus.INITIALIZING:
+                run.status = ActionStatus.RUNNING
+                run.remaining = CATALOGUE[run.action.action_type].duration
+                self._vehicle.mark_state_due()
+            elif run.status is ActionStatus.RUNNING:
+                run.remaining -= sim_dt
+                if run.remaining <= 0.0:
+                    self._finish(run)
+            if run.active:
+                any_active = True
+                hard_active = hard_active or hard
+        self._queue = [run for run in self._queue if not run.terminal]
+
+    def _finish(self, run: ActionRun) -> None:
+        failure = self._apply(run.action)
+        if failure is None:
+            run.status = ActionStatus.FINISHED
+        else:
+            run.fail(failure)
+        self._vehicle.mark_state_due()
+
+    def check_cancel_done(self) -> None:
+        """cancelOrder turns FINISHED once the vehicle stands still with nothing running."""
+        if not self._cancels:
+            return
+        vehicle = self._vehicle
+        if vehicle.pending or vehicle.driving or any(not r.terminal for r in self._queue):
+            return
+        for run in self._cancels:
+            run.status = ActionStatus.FINISHED
+        self._cancels = []
+        vehicle.mark_state_due()
+
+    # ------------------------------------------------------------------ instant actions
+    def run_instant(self, action: Action) -> None:
+        """Execute one instant action (immediately, except cancelOrder)."""
+        if action.action_id in self._runs:
+            return  # a resend of an action we already know: do not execute it twice
+        idle = self._vehicle.idle  # before this action itself shows up as not terminal
+        run = ActionRun(action=action)
+        self._runs[action.action_id] = run
+        problem = check_action(action, ActionScope.INSTANT)
+        if problem is not None:
+            run.fail(problem)
+            return
+        vehicle = self._vehicle
+        kind = action.action_type
+        if kind == "cancelOrder":
+            self._cancel(run)
+            return
+        if kind == "startPause":
+            vehicle.paused = True
+        elif kind == "stopPause":
+            vehicle.paused = False
+        elif kind == "stateRequest":
+            vehicle.mark_state_due()
+        elif kind == "factsheetRequest":
+            vehicle.factsheet_due = True
+        elif kind == "initPosition" and not idle:
+            run.fail("initPosition is only accepted while the vehicle is idle")
+            return
+        else:
+            failure = self._apply(action)
+            if failure is not None:
+                run.fail(failure)
+                return
+        run.status = ActionStatus.FINISHED
+
+    def _cancel(self, run: ActionRun) -> None:
+        vehicle = self._vehicle
+        if not vehicle.has_order:
+            run.fail("no order to cancel")
+            vehicle.add_no_order_to_cancel(run.action_id)
+            return
+        for other in self._runs.values():
+            if other.node_key is not None and other.status is ActionStatus.WAITING:
+                other.fail("order cancelled")
+        self._queue = [r for r in self._queue if not r.terminal]
+        vehicle.cancel_order()
+        run.status = ActionStatus.RUNNING
+        self._cancels.append(run)
+
+    # ------------------------------------------------------------------ effects
+    def _apply(self, action: Action) -> str | None:
+        """Carry out the effect of a finished action; returns a failure reason or None."""
+        vehicle = self._vehicle
+        params = action_params(action)
+        kind = action.action_type
+        if kind == "pick":
+            if vehicle.loads:
+                return "already carrying a load"
+            vehicle.loads = [
+                Load(
+                    load_id=_opt_str(params.get("loadId")),
+                    load_type=_opt_str(params.get("loadType")),
+                    load_position=_opt_str(params.get("lhd")),
+                )
+            ]
+        elif kind == "drop":
+            if not vehicle.loads:
+                return "no load to drop"
+            vehicle.loads = []
+        elif kind == "startCharging":
+            if vehicle.driving:
+                return "cannot start charging while driving"
+            vehicle.charging = True
+        elif kind == "stopCharging":
+            vehicle.charging = False
+        elif kind == "initPosition":
+            return self._init_position(params)
+        else:
+            return f"actionType {kind!r} has no effect in the simulator"
+        vehicle.mark_state_due()
+        return None
+
+    def _init_position(self, params: dict[str, ParameterValue]) -> str | None:
+        coords = [params.get(key) for key in ("x", "y", "theta")]
+        numbers = [
+            float(v)
+            for v in coords
+            if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+        ]
+        if len(numbers) != 3:
+            return "x, y and theta must be finite numbers"
+        map_id, node_id = params.get("mapId"), params.get("lastNodeId")
+        if not isinstance(map_id, str) or map_id not in self._vehicle.maps:
+            return f"unknown mapId {map_id!r}"
+        if not isinstance(node_id, str):
+            return "lastNodeId must be a string"
+        self._vehicle.init_position(numbers[0], numbers[1], numbers[2], map_id, node_id)
+        return None
+
+
+def _opt_str(value: object) -> str | None:
+    return None if value is None else str(value)

@@ -1,0 +1,384 @@
+"""Pure state machine of one virtual AGV: orders, driving, actions, battery. No MQTT here.
+
+Time only advances through :meth:`VirtualVehicle.tick`, so tests drive it with a fake
+clock. Every call that changes what the state message would report raises the "state due"
+flag (REFERENCE §3 F.30); the transport pops it with :meth:`VirtualVehicle.take_state_due`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from simulator import messages
+from simulator.execution import ActionExecutor
+from simulator.orders import (
+    OrderRejected,
+    Point,
+    Step,
+    build_steps,
+    check_actions,
+    check_start,
+    check_structure,
+    resolve_targets,
+)
+from vda5050 import (
+    Connection,
+    Error,
+    ErrorReference,
+    Factsheet,
+    InstantActions,
+    Load,
+    Order,
+    State,
+    Visualization,
+)
+from vda5050.enums import ConnectionState, ErrorLevel, ErrorType
+from vda5050.headers import HeaderCounter
+
+_EPS = 1e-6
+# Rejection errors are kept until the next accepted order; cap them so a master that
+# keeps resending a bad order cannot grow the state message without bound.
+_MAX_ORDER_ERRORS = 10
+
+
+@dataclass(frozen=True, slots=True)
+class VehicleConfig:
+    """Static parameters of one simulated vehicle (speeds in m/s, battery in %)."""
+
+    serial_number: str = "AGV-1"
+    manufacturer: str = "sim"
+    version: str = "2.0.0"
+    speed: float = 1.0
+    time_scale: float = 1.0
+    start_reach: float = 0.5
+    state_interval: float = 30.0
+    visualization_hz: float = 1.0
+    battery_start: float = 100.0
+    battery_drain_per_metre: float = 0.05
+    battery_idle_drain_per_second: float = 0.002
+    battery_charge_per_second: float = 1.0
+    map_version: str = "1"
+
+
+@dataclass(frozen=True, slots=True)
+class StartPose:
+    """Where a vehicle boots: on ``node_id`` of ``map_id`` at (x, y, theta)."""
+
+    map_id: str
+    node_id: str
+    x: float
+    y: float
+    theta: float = 0.0
+
+
+def normalize_angle(theta: float) -> float:
+    """Wrap an angle to [-pi, pi] as the protocol requires."""
+    return math.atan2(math.sin(theta), math.cos(theta))
+
+
+class VirtualVehicle:
+    """One simulated AGV. Not thread-safe: the fleet serialises calls with a lock."""
+
+    def __init__(
+        self,
+        config: VehicleConfig,
+        start: StartPose,
+        *,
+        known_nodes: dict[str, Point] | None = None,
+    ) -> None:
+        self.config = config
+        self.maps = frozenset({start.map_id})
+        self.known_nodes = dict(known_nodes or {})
+        self.headers = HeaderCounter()
+        self.map_id = start.map_id
+        self.x, self.y, self.theta = start.x, start.y, normalize_angle(start.theta)
+        self.position_initialized = True
+        self.order_id = ""
+        self.order_update_id = 0
+        self.last_node_id = start.node_id
+        self.last_node_sequence_id = 0
+        self.pending: list[Step] = []
+        self.driving = False
+        self.paused = False
+        self.speed_now = 0.0
+        self.distance_since_last_node = 0.0
+        self.battery = max(0.0, min(100.0, config.battery_start))
+        self.charging = False
+        self.loads: list[Load] = []
+        self.order_errors: list[Error] = []
+        self.injected_errors: list[Error] = []
+        self.cancelled = False
+        self.sim_time = 0.0
+        self.actions = ActionExecutor(self)
+        self._state_due = True
+        self.factsheet_due = True
+
+    # ------------------------------------------------------------------ events
+    def mark_state_due(self) -> None:
+        """Something reportable changed: publish a state message soon."""
+        self._state_due = True
+
+    def take_state_due(self) -> bool:
+        """Return and clear the "state due" flag."""
+        due, self._state_due = self._state_due, False
+        return due
+
+    def take_factsheet_due(self) -> bool:
+        """Return and clear the "factsheet requested" flag."""
+        due, self.factsheet_due = self.factsheet_due, False
+        return due
+
+    # ------------------------------------------------------------------ queries
+    @property
+    def has_order(self) -> bool:
+        """True while nodes/edges are pending or order actions are not terminal."""
+        return bool(self.pending) or self.actions.order_busy
+
+    @property
+    def idle(self) -> bool:
+        """REFERENCE §3 C.16: no node/edge states and every action terminal."""
+        return not self.pending and self.actions.all_terminal
+
+    @property
+    def position(self) -> Point:
+        """Current (x, y) in metres."""
+        return (self.x, self.y)
+
+    # ------------------------------------------------------------------ orders
+    def on_order(self, order: Order) -> bool:
+        """Accept or reject an order/update; returns True if it was accepted."""
+        self.mark_state_due()
+        try:
+            if order.order_id == self.order_id and self.order_id:
+                if order.order_update_id == self.order_update_id:
+                    return False  # resend of what we already run: ignore (REFERENCE §3 B.14)
+                self._accept_update(order)
+            else:
+                self._accept_new(order)
+        except OrderRejected as rejected:
+            self._reject(order, rejected)
+            return False
+        self.order_errors.clear()
+        self.cancelled = False
+        return True
+
+    def reject_undecodable(self, reason: str) -> None:
+        """An order payload that does not even decode is a validationError too."""
+        self._add_order_error(ErrorType.VALIDATION_ERROR, reason, [])
+        self.mark_state_due()
+
+    def _accept_new(self, order: Order) -> None:
+        if not self.idle:
+            raise OrderRejected(
+                ErrorType.ORDER_ERROR,
+                f"vehicle is busy with order {self.order_id!r}; cancel it or wait until idle",
+            )
+        check_structure(order)
+        if order.nodes[0].sequence_id != 0:
+            raise OrderRejected(ErrorType.VALIDATION_ERROR, "new order must start at sequenceId 0")
+        targets = resolve_targets(order, self.maps, self.known_nodes)
+        check_start(order, targets[0], self.position, self.last_node_id, self.config.start_reach)
+        check_actions(order, skip_first_node=False)
+        self.order_id = order.order_id
+        self.order_update_id = order.order_update_id
+        self.pending = build_steps(order, targets, include_first=True)
+        self.actions.reset_for_new_order(self.pending)
+
+    def _accept_update(self, order: Order) -> None:
+        if order.order_update_id < self.order_update_id:
+            raise OrderRejected(
+                ErrorType.ORDER_UPDATE_ERROR,
+                f"orderUpdateId {order.order_update_id} is older than {self.order_update_id}",
+            )
+        if self.cancelled:
+            raise OrderRejected(
+                ErrorType.ORDER_UPDATE_ERROR, "order was cancelled; send a new orderId"
+            )
+        check_structure(order)
+        targets = resolve_targets(order, self.maps, self.known_nodes)
+        released = [i for i, step in enumerate(self.pending) if step.released]
+        stitch = order.nodes[0]
+        if released:
+            keep = released[-1] + 1
+            expected = self.pending[keep - 1].key
+        else:
+            keep = 0
+            expected = (self.last_node_id, self.last_node_sequence_id)
+        if (stitch.node_id, stitch.sequence_id) != expected:
+            raise OrderRejected(
+                ErrorType.ORDER_UPDATE_ERROR,
+                f"update starts at {stitch.node_id!r}/{stitch.sequence_id}, "
+                f"expected last base node {expected[0]!r}/{expected[1]}",
+            )
+        check_actions(order, skip_first_node=True)
+        # Base is immutable, horizon is replaced; the stitching node keeps its first-sent
+        # content (2.1 §6.6.2), so only the elements after it are appended.
+        dropped = self.pending[keep:]
+        self.pending = self.pending[:keep] + build_steps(order, targets, include_first=False)
+        self.actions.replace_horizon(dropped, self.pending[keep:])
+        self.order_update_id = order.order_update_id
+
+    def _reject(self, order: Order, rejected: OrderRejected) -> None:
+        refs = [
+            ErrorReference(reference_key="orderId", reference_value=order.order_id),
+            ErrorReference(
+                reference_key="orderUpdateId", reference_value=str(order.order_update_id)
+            ),
+        ]
+        self._add_order_error(rejected.error_type, rejected.description, refs)
+
+    def _add_order_error(self, error_type: str, text: str, refs: list[ErrorReference]) -> None:
+        error = Error(
+            error_type=error_type,
+            error_references=refs or None,
+            error_description=text,
+            error_level=ErrorLevel.WARNING,
+        )
+        self.order_errors = [*self.order_errors, error][-_MAX_ORDER_ERRORS:]
+
+    # ------------------------------------------------------------------ instant actions
+    def on_instant_actions(self, message: InstantActions) -> None:
+        """Execute instant actions in list order."""
+        for action in message.actions:
+            self.actions.run_instant(action)
+        self.mark_state_due()
+
+    def add_no_order_to_cancel(self, action_id: str) -> None:
+        """cancelOrder without an active order (REFERENCE §3 D.20)."""
+        self._add_order_error(
+            ErrorType.NO_ORDER_TO_CANCEL,
+            "cancelOrder received but there is no order to cancel",
+            [ErrorReference(reference_key="actionId", reference_value=action_id)],
+        )
+
+    def cancel_order(self) -> None:
+        """Drop everything after the node we are heading to (or all, if on a node)."""
+        self.cancelled = True
+        moving_on_edge = self.distance_since_last_node > _EPS or (
+            bool(self.pending) and self.pending[0].edge is None
+        )
+        if self.pending and self.pending[0].released and moving_on_edge:
+            self.pending = self.pending[:1]
+        else:
+            self.pending = []
+        self.mark_state_due()
+
+    def init_position(self, x: float, y: float, theta: float, map_id: str, node_id: str) -> None:
+        """Relocate the vehicle (initPosition)."""
+        self.x, self.y, self.theta = x, y, normalize_angle(theta)
+        self.map_id = map_id
+        self.last_node_id = node_id
+        self.last_node_sequence_id = 0
+        self.distance_since_last_node = 0.0
+        self.position_initialized = True
+        self.mark_state_due()
+
+    # ------------------------------------------------------------------ faults
+    def inject_error(
+        self, error_type: str, level: ErrorLevel = ErrorLevel.WARNING, description: str = ""
+    ) -> None:
+        """Report an artificial error until :meth:`clear_injected_errors` (fault injection)."""
+        self.injected_errors.append(
+            Error(error_type=error_type, error_description=description or None, error_level=level)
+        )
+        self.mark_state_due()
+
+    def clear_injected_errors(self, error_type: str | None = None) -> None:
+        """Remove injected errors (all, or those of one type)."""
+        self.injected_errors = [
+            e for e in self.injected_errors if error_type is not None and e.error_type != error_type
+        ]
+        self.mark_state_due()
+
+    # ------------------------------------------------------------------ simulation
+    def tick(self, dt: float) -> None:
+        """Advance the simulation by ``dt`` wall seconds (scaled by the time-lapse factor)."""
+        sim_dt = max(0.0, dt) * self.config.time_scale
+        self.sim_time += sim_dt
+        was_driving = self.driving
+        if not self.paused:
+            self.actions.advance(sim_dt)
+        moved = self._drive(sim_dt)
+        self._update_battery(sim_dt, moved)
+        self.actions.check_cancel_done()
+        if self.driving != was_driving:
+            self.mark_state_due()
+
+    def _can_drive(self) -> bool:
+        return (
+            bool(self.pending)
+            and self.pending[0].released
+            and not self.paused
+            and not self.actions.blocks_driving
+            and self.battery > 0.0
+        )
+
+    def _drive(self, sim_dt: float) -> float:
+        """Move towards the next node; returns metres driven."""
+        if not self._can_drive():
+            self.driving, self.speed_now = False, 0.0
+            return 0.0
+        if self.charging:
+            # Driving off the charger disconnects it, like a real charging contact would.
+            self.charging = False
+            self.mark_state_due()
+        step = self.pending[0]
+        speed = self.config.speed
+        if step.edge is not None and step.edge.max_speed:
+            speed = min(speed, step.edge.max_speed)
+        dx, dy = step.target[0] - self.x, step.target[1] - self.y
+        remaining = math.hypot(dx, dy)
+        travel = min(remaining, speed * sim_dt)
+        if remaining > _EPS:
+            self.theta = math.atan2(dy, dx)
+            self.x += dx / remaining * travel
+            self.y += dy / remaining * travel
+            self.distance_since_last_node += travel
+        self.driving, self.speed_now = True, speed
+        if remaining - travel <= _EPS:
+            self._arrive(step)
+            # Keep "driving" across a node we pass through so the flag does not flap.
+            self.driving = self._can_drive()
+            self.speed_now = speed if self.driving else 0.0
+        return travel
+
+    def _arrive(self, step: Step) -> None:
+        self.pending.pop(0)
+        self.x, self.y = float(step.target[0]), float(step.target[1])
+        pos = step.node.node_position
+        if pos is not None and pos.theta is not None:
+            self.theta = normalize_angle(pos.theta)
+        self.last_node_id, self.last_node_sequence_id = step.key
+        self.distance_since_last_node = 0.0
+        self.actions.trigger_node(step.key)
+        self.mark_state_due()
+
+    def _update_battery(self, sim_dt: float, metres: float) -> None:
+        cfg = self.config
+        before = self.battery
+        if self.charging:
+            self.battery += cfg.battery_charge_per_second * sim_dt
+        else:
+            self.battery -= cfg.battery_idle_drain_per_second * sim_dt
+        self.battery -= cfg.battery_drain_per_metre * metres
+        self.battery = max(0.0, min(100.0, self.battery))
+        if self.charging and self.battery >= 100.0 > before:
+            self.mark_state_due()
+
+    # ------------------------------------------------------------------ messages
+    def build_state(self) -> State:
+        """Assemble a state message; consumes one state headerId."""
+        return messages.state_message(self)
+
+    def build_visualization(self) -> Visualization:
+        """Assemble a visualization message; consumes one visualization headerId."""
+        return messages.visualization_message(self)
+
+    def build_connection(self, state: ConnectionState) -> Connection:
+        """Assemble a connection message; consumes one connection headerId."""
+        return messages.connection_message(self, state)
+
+    def build_factsheet(self) -> Factsheet:
+        """Assemble the factsheet; consumes one factsheet headerId."""
+        return messages.factsheet_message(self)

@@ -1,0 +1,257 @@
+"""JSON encoding and decoding of VDA 5050 2.x messages.
+
+``decode`` is the trust boundary for everything arriving over MQTT: whatever the payload,
+it returns a typed Struct or raises :class:`~vda5050.errors.DecodeError`, never anything
+else, so one bad vehicle cannot crash a subscriber loop.
+
+NaN/Infinity: msgspec's JSON parser already rejects the ``NaN``/``Infinity`` tokens and
+numbers that overflow a float (``1e400`` → "Number out of range"), so decoded messages
+never hold non-finite floats. Encoding is the weak side: msgspec silently writes NaN and
+Infinity as ``null``, so :func:`encode` checks for them first and refuses.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any, Literal, overload
+
+import msgspec
+
+from vda5050.enums import TopicKind
+from vda5050.errors import DecodeError, EncodeError, TopicError, VersionError
+from vda5050.topics import parse_kind
+from vda5050.v2 import (
+    MESSAGE_TYPES,
+    Connection,
+    Factsheet,
+    InstantActions,
+    Message,
+    Order,
+    State,
+    Visualization,
+)
+from vda5050.versions import SUPPORTED_MAJORS, major_of
+
+__all__ = ["MAX_PAYLOAD_BYTES", "Payload", "decode", "encode"]
+
+#: Largest payload :func:`decode` accepts, checked before parsing (memory/CPU bound for
+#: hostile input). Read at call time, so tests and deployments may change it.
+MAX_PAYLOAD_BYTES = 1024 * 1024
+
+#: What :func:`decode` accepts; paho-mqtt hands out ``bytes``.
+Payload = bytes | bytearray | memoryview | str
+
+_DECODERS: dict[TopicKind, msgspec.json.Decoder[Any]] = {
+    kind: msgspec.json.Decoder(type_) for kind, type_ in MESSAGE_TYPES.items()
+}
+_ENCODER = msgspec.json.Encoder()
+
+# msgspec validation messages end with " - at `$.nodes[2].nodeId`" when tied to an element.
+_PATH_RE = re.compile(r"^(?P<reason>.*) - at `(?P<path>\$[^`]*)`$", re.DOTALL)
+
+
+def encode(message: msgspec.Struct) -> bytes:
+    """Encode a message (or any of its parts) to compact UTF-8 JSON.
+
+    Raises:
+        EncodeError: if a float is NaN or infinite (JSON cannot represent it and msgspec
+            would silently write ``null``), or the value is otherwise not encodable.
+    """
+    path = _find_non_finite(message)
+    if path is not None:
+        raise EncodeError("NaN and Infinity are not allowed in VDA 5050 JSON", path)
+    try:
+        return _ENCODER.encode(message)
+    except (msgspec.EncodeError, TypeError, ValueError, OverflowError) as exc:
+        # UnicodeEncodeError (lone surrogates in a str) is a ValueError subclass.
+        raise EncodeError(str(exc)) from exc
+    except RecursionError:
+        # Free-form parameter values nested ~1000 deep exceed msgspec's recursion budget.
+        raise EncodeError("value nested too deeply") from None
+
+
+@overload
+def decode(
+    kind: Literal[TopicKind.ORDER],
+    payload: Payload,
+    *,
+    version: str = ...,
+    max_payload_bytes: int | None = ...,
+) -> Order: ...
+@overload
+def decode(
+    kind: Literal[TopicKind.INSTANT_ACTIONS],
+    payload: Payload,
+    *,
+    version: str = ...,
+    max_payload_bytes: int | None = ...,
+) -> InstantActions: ...
+@overload
+def decode(
+    kind: Literal[TopicKind.STATE],
+    payload: Payload,
+    *,
+    version: str = ...,
+    max_payload_bytes: int | None = ...,
+) -> State: ...
+@overload
+def decode(
+    kind: Literal[TopicKind.VISUALIZATION],
+    payload: Payload,
+    *,
+    version: str = ...,
+    max_payload_bytes: int | None = ...,
+) -> Visualization: ...
+@overload
+def decode(
+    kind: Literal[TopicKind.CONNECTION],
+    payload: Payload,
+    *,
+    version: str = ...,
+    max_payload_bytes: int | None = ...,
+) -> Connection: ...
+@overload
+def decode(
+    kind: Literal[TopicKind.FACTSHEET],
+    payload: Payload,
+    *,
+    version: str = ...,
+    max_payload_bytes: int | None = ...,
+) -> Factsheet: ...
+@overload
+def decode(
+    kind: TopicKind | str,
+    payload: Payload,
+    *,
+    version: str = ...,
+    max_payload_bytes: int | None = ...,
+) -> Message: ...
+
+
+def decode(
+    kind: TopicKind | str,
+    payload: Payload,
+    *,
+    version: str = "2.0.0",
+    max_payload_bytes: int | None = None,
+) -> Message:
+    """Decode ``payload`` as a message of topic ``kind``.
+
+    Args:
+        kind: topic kind (``TopicKind.STATE`` or ``"state"``); selects the Struct type.
+        payload: raw MQTT payload (UTF-8 JSON).
+        version: protocol version the vehicle speaks; only 2.x is supported (2.0.0 and
+            2.1.0 share one Struct set, unknown fields are ignored).
+        max_payload_bytes: size limit, default :data:`MAX_PAYLOAD_BYTES`.
+
+    Raises:
+        DecodeError: for any problem: unknown kind or version, oversized, non-UTF-8,
+            malformed or too deeply nested JSON, NaN/Infinity/overflowing numbers, wrong
+            types, missing required fields or out-of-range values.
+    """
+    topic_kind = _kind_or_error(kind)
+    _check_version(topic_kind, version)
+    data = _checked_bytes(topic_kind, payload, max_payload_bytes)
+    try:
+        result: Message = _DECODERS[topic_kind].decode(data)
+    except msgspec.ValidationError as exc:
+        match = _PATH_RE.match(str(exc))
+        if match is None:
+            raise DecodeError(topic_kind, str(exc)) from None
+        raise DecodeError(topic_kind, match["reason"], match["path"]) from None
+    except msgspec.DecodeError as exc:
+        # msgspec's own wording is already specific ("JSON is malformed: invalid character
+        # (byte 5)", "Input data was truncated").
+        raise DecodeError(topic_kind, str(exc)) from None
+    except RecursionError:
+        # msgspec recurses per nesting level; ~1000 levels exhaust the interpreter limit.
+        raise DecodeError(topic_kind, "JSON nested too deeply") from None
+    except Exception as exc:
+        # Last line of the trust boundary: no input may crash the caller with an
+        # exception type it does not expect (the specific cases above cover all we know).
+        raise DecodeError(topic_kind, f"{type(exc).__name__}: {exc}") from None
+    return result
+
+
+def _kind_or_error(kind: object) -> TopicKind:
+    """Return ``kind`` as :class:`TopicKind` or raise :class:`DecodeError`."""
+    try:
+        return parse_kind(kind)
+    except TopicError:
+        raise DecodeError(str(kind), "unknown topic kind") from None
+
+
+def _check_version(kind: TopicKind, version: str) -> None:
+    """Raise :class:`DecodeError` unless ``version`` is a supported protocol version."""
+    try:
+        major = major_of(version)
+    except VersionError as exc:
+        raise DecodeError(kind, str(exc)) from None
+    if major not in SUPPORTED_MAJORS:
+        raise DecodeError(kind, f"unsupported protocol version {version!r}")
+
+
+def _checked_bytes(kind: TopicKind, payload: object, limit: int | None) -> bytes | memoryview:
+    """Return ``payload`` as bytes after the size and UTF-8 checks."""
+    max_bytes = MAX_PAYLOAD_BYTES if limit is None else limit
+    if isinstance(payload, str):
+        # A character is at least one byte: reject huge strings before encoding them.
+        if len(payload) > max_bytes:
+            raise DecodeError(kind, f"payload larger than {max_bytes} bytes")
+        try:
+            payload = payload.encode("utf-8")
+        except UnicodeEncodeError as exc:
+            raise DecodeError(kind, f"payload is not valid UTF-8: {exc.reason}") from None
+    if not isinstance(payload, bytes | bytearray | memoryview):
+        raise DecodeError(kind, f"payload must be bytes, got {type(payload).__name__}")
+    size = payload.nbytes if isinstance(payload, memoryview) else len(payload)
+    if size > max_bytes:
+        raise DecodeError(kind, f"payload of {size} bytes exceeds limit of {max_bytes} bytes")
+    try:
+        # msgspec only validates UTF-8 in strings it keeps (and raises UnicodeDecodeError
+        # there, not its own error); skipped unknown fields are not checked at all.
+        # Validating up front rejects every non-UTF-8 payload uniformly.
+        str(payload, "utf-8")
+    except UnicodeDecodeError as exc:
+        raise DecodeError(
+            kind, f"payload is not valid UTF-8 (byte {exc.start}: {exc.reason})"
+        ) from None
+    except (TypeError, ValueError) as exc:  # non-contiguous memoryview and the like
+        raise DecodeError(kind, f"unreadable payload: {exc}") from None
+    return payload if isinstance(payload, bytes | memoryview) else bytes(payload)
+
+
+_FieldNames = tuple[tuple[str, str], ...]
+_FIELD_CACHE: dict[type, _FieldNames] = {}
+
+
+def _struct_fields(cls: type[msgspec.Struct]) -> _FieldNames:
+    """(attribute name, wire name) pairs of a Struct type, cached."""
+    names = _FIELD_CACHE.get(cls)
+    if names is None:
+        names = tuple((f.name, f.encode_name) for f in msgspec.structs.fields(cls))
+        _FIELD_CACHE[cls] = names
+    return names
+
+
+def _find_non_finite(root: object) -> str | None:
+    """Return the JSON path of a NaN/Infinity float in ``root``, or ``None`` if there is none.
+
+    Iterative on purpose: action parameter values are arbitrary JSON and could be nested
+    deeper than the recursion limit.
+    """
+    stack: list[tuple[object, str]] = [(root, "$")]
+    while stack:
+        value, path = stack.pop()
+        if isinstance(value, float):
+            if not math.isfinite(value):
+                return path
+        elif isinstance(value, msgspec.Struct):
+            for attr, wire in _struct_fields(type(value)):
+                stack.append((getattr(value, attr), f"{path}.{wire}"))
+        elif isinstance(value, list | tuple):
+            stack.extend((item, f"{path}[{i}]") for i, item in enumerate(value))
+        elif isinstance(value, dict):
+            stack.extend((item, f"{path}.{key}") for key, item in value.items())
+    return None

@@ -1,0 +1,37 @@
+"""Protocol version strings (``"2.1.0"``) and the topic major version (``"v2"``)."""
+
+from __future__ import annotations
+
+import re
+
+from vda5050.errors import VersionError
+
+# The header says "[Major].[Minor].[Patch]"; minor/patch are optional here so that a
+# sloppy "2.1" from a vehicle still maps to the right major version.
+_VERSION_RE = re.compile(r"(\d{1,4})(?:\.(\d{1,4}))?(?:\.(\d{1,4}))?")
+
+#: Protocol major versions whose messages this package can decode.
+SUPPORTED_MAJORS = frozenset({2})
+
+
+def parse_version(version: str) -> tuple[int, int, int]:
+    """Split ``"2.1.0"`` into ``(2, 1, 0)``; missing minor/patch count as 0.
+
+    Raises:
+        VersionError: if ``version`` is not of the form ``major[.minor[.patch]]``.
+    """
+    match = _VERSION_RE.fullmatch(version) if isinstance(version, str) else None
+    if match is None:
+        raise VersionError(f"malformed protocol version {version!r}, expected e.g. '2.1.0'")
+    major, minor, patch = match.groups()
+    return int(major), int(minor or 0), int(patch or 0)
+
+
+def major_of(version: str) -> int:
+    """Return the major version number of ``version`` (``"2.1.0"`` → ``2``)."""
+    return parse_version(version)[0]
+
+
+def major_version_of(version: str) -> str:
+    """Return the topic major-version level for ``version`` (``"2.1.0"`` → ``"v2"``)."""
+    return f"v{major_of(version)}"
