@@ -1,1 +1,4 @@
-"""Control: the real-time master-control process (MQTT in/out, live fleet model, order execution) and the live page."""
+"""Control: the real-time master-control process and the live page.
+
+MQTT in and out, the live fleet model in memory, VDA 5050 order execution.
+"""

@@ -7,7 +7,7 @@ from channels.generic.websocket import AsyncJsonWebsocketConsumer
 from fleet.realtime import LIVE_GROUP, remember_web_loop
 
 
-class LiveConsumer(AsyncJsonWebsocketConsumer):
+class LiveConsumer(AsyncJsonWebsocketConsumer):  # type: ignore[misc]
     """Streams live fleet events (`vehicles.update`, `orders.changed`) to a logged-in browser."""
 
     async def connect(self) -> None:

@@ -16,14 +16,13 @@ from datetime import UTC, datetime
 from typing import Any, Protocol
 
 import vda5050
-from vda5050.codec import DecodeError, decode, encode
-from vda5050.enums import TopicKind
-from vda5050.headers import HeaderCounter, now_timestamp
-from vda5050.topics import Topic, TopicError
-
 from control import snapshots
 from control.execution import LayoutIndex, OrderExecution, Phase, Progress, build_order
 from control.live import Fleet, LiveVehicle
+from vda5050 import DecodeError, decode, encode
+from vda5050.enums import TopicKind
+from vda5050.headers import HeaderCounter, now_timestamp
+from vda5050.topics import Topic, TopicError
 
 logger = logging.getLogger(__name__)
 
@@ -73,7 +72,9 @@ class Controller:
 
     RESEND_AFTER = 5.0  # seconds without acceptance before an order is sent again
 
-    def __init__(self, *, store: Store, interface_name: str, publish: Publish | None = None) -> None:
+    def __init__(
+        self, *, store: Store, interface_name: str, publish: Publish | None = None
+    ) -> None:
         self.store = store
         self.interface_name = interface_name
         self.publish: Publish = publish or (lambda topic, payload, qos: None)
@@ -92,8 +93,9 @@ class Controller:
         self.layouts = self.store.load_layouts()
         with self.lock:
             for row in self.store.load_vehicles():
-                vehicle = self.fleet.get_or_add(row["manufacturer"], row["serial_number"],
-                                                row["interface_name"])
+                vehicle = self.fleet.get_or_add(
+                    row["manufacturer"], row["serial_number"], row["interface_name"]
+                )
                 vehicle.pk, vehicle.version = row["pk"], row["protocol_version"]
                 vehicle.needs_flush = False
 
@@ -113,8 +115,9 @@ class Controller:
         if handler is None:
             return  # our own order/instantActions echoes
         with self.lock:
-            vehicle = self.fleet.get_or_add(topic.manufacturer, topic.serial_number,
-                                            topic.interface_name)
+            vehicle = self.fleet.get_or_add(
+                topic.manufacturer, topic.serial_number, topic.interface_name
+            )
             try:
                 message = decode(topic.kind, payload, version=vehicle.version)
             except DecodeError as exc:
@@ -164,8 +167,13 @@ class Controller:
     def _reject(self, counter: str, topic_text: str, exc: Exception) -> None:
         self.counters[counter] += 1
         if self.counters[counter] <= 20 or self.counters[counter] % 1000 == 0:
-            logger.warning("dropped message on %s (%s #%d): %s", topic_text[:200], counter,
-                           self.counters[counter], exc)
+            logger.warning(
+                "dropped message on %s (%s #%d): %s",
+                topic_text[:200],
+                counter,
+                self.counters[counter],
+                exc,
+            )
 
     # Outbound ----------------------------------------------------------------------------------
 
@@ -200,8 +208,11 @@ class Controller:
         if state is None or order.map_id not in self.layouts:
             return None
         execution = OrderExecution.plan(
-            transport_order_id=order.transport_order_id, vda_order_id=order.vda_order_id,
-            route=order.route, pickup=order.pickup_node)
+            transport_order_id=order.transport_order_id,
+            vda_order_id=order.vda_order_id,
+            route=order.route,
+            pickup=order.pickup_node,
+        )
         if state.order_id == order.vda_order_id:
             vehicle.execution = execution  # restarted mid-order: adopt, never resend
             self._progress.extend(execution.observe(state))
@@ -212,8 +223,16 @@ class Controller:
         if not (vehicle.is_available and vehicle.is_idle):
             return None
         if state.last_node_id != order.route[0]:
-            self._end(Progress("failed", order.transport_order_id, {
-                "reason": f"vehicle is at {state.last_node_id}, route starts at {order.route[0]}"}))
+            self._end(
+                Progress(
+                    "failed",
+                    order.transport_order_id,
+                    {
+                        "reason": f"vehicle is at {state.last_node_id}, "
+                        f"route starts at {order.route[0]}"
+                    },
+                )
+            )
             return None
         vehicle.execution = execution
         self._publish_order(vehicle, order, execution)
@@ -223,14 +242,24 @@ class Controller:
         self._progress.append(progress)
         self._ended.add(progress.order_id)
 
-    def _publish_order(self, vehicle: LiveVehicle, order: ActiveOrder,
-                       execution: OrderExecution) -> None:
-        nodes, edges = build_order(execution, self.layouts[order.map_id], load_id=order.load_id,
-                                   load_type=order.load_type, pick_station=order.pick_station,
-                                   drop_station=order.drop_station)
+    def _publish_order(
+        self, vehicle: LiveVehicle, order: ActiveOrder, execution: OrderExecution
+    ) -> None:
+        nodes, edges = build_order(
+            execution,
+            self.layouts[order.map_id],
+            load_id=order.load_id,
+            load_type=order.load_type,
+            pick_station=order.pick_station,
+            drop_station=order.drop_station,
+        )
         message = vda5050.Order(
-            **self._header(vehicle, TopicKind.ORDER), order_id=execution.vda_order_id,
-            order_update_id=0, nodes=nodes, edges=edges)
+            **self._header(vehicle, TopicKind.ORDER),
+            order_id=execution.vda_order_id,
+            order_update_id=0,
+            nodes=nodes,
+            edges=edges,
+        )
         self._send(vehicle, TopicKind.ORDER, message)
         execution.sent_monotonic = time.monotonic()
 
@@ -238,28 +267,39 @@ class Controller:
         action_id = execution.start_cancel()
         self.send_instant_action(vehicle, "cancelOrder", action_id=action_id)
 
-    def send_instant_action(self, vehicle: LiveVehicle, action_type: str, *,
-                            action_id: str | None = None,
-                            parameters: dict[str, Any] | None = None) -> str:
+    def send_instant_action(
+        self,
+        vehicle: LiveVehicle,
+        action_type: str,
+        *,
+        action_id: str | None = None,
+        parameters: dict[str, Any] | None = None,
+    ) -> str:
         """Publish one instant action to `vehicle`; returns its actionId."""
         action = vda5050.make_action(action_type, parameters, action_id=action_id)
-        message = vda5050.InstantActions(**self._header(vehicle, TopicKind.INSTANT_ACTIONS),
-                                         actions=[action])
+        message = vda5050.InstantActions(
+            **self._header(vehicle, TopicKind.INSTANT_ACTIONS), actions=[action]
+        )
         self._send(vehicle, TopicKind.INSTANT_ACTIONS, message)
         return action.action_id
 
     def _header(self, vehicle: LiveVehicle, kind: TopicKind) -> dict[str, Any]:
         return {
             "header_id": self.headers.next_id(vehicle.manufacturer, vehicle.serial_number, kind),
-            "timestamp": now_timestamp(vehicle.version), "version": vehicle.version,
-            "manufacturer": vehicle.manufacturer, "serial_number": vehicle.serial_number,
+            "timestamp": now_timestamp(vehicle.version),
+            "version": vehicle.version,
+            "manufacturer": vehicle.manufacturer,
+            "serial_number": vehicle.serial_number,
         }
 
     def _send(self, vehicle: LiveVehicle, kind: TopicKind, message: Any) -> None:
-        topic = Topic(interface_name=vehicle.interface_name,
-                      major_version=vda5050.major_version_of(vehicle.version),
-                      manufacturer=vehicle.manufacturer, serial_number=vehicle.serial_number,
-                      kind=kind)
+        topic = Topic(
+            interface_name=vehicle.interface_name,
+            major_version=vda5050.major_version_of(vehicle.version),
+            manufacturer=vehicle.manufacturer,
+            serial_number=vehicle.serial_number,
+            kind=kind,
+        )
         self.publish(str(topic), encode(message), 0)
         self.counters[f"sent_{kind}"] += 1
 

@@ -54,8 +54,11 @@ class Children:
         self.processes: list[tuple[str, subprocess.Popen[bytes]]] = []
 
     def start(self, name: str, argv: Sequence[str], env: dict[str, str] | None = None) -> None:
-        process = subprocess.Popen(list(argv), env={**os.environ, **(env or {})},  # noqa: S603
-                                   cwd=Path(__file__).resolve().parent.parent)
+        process = subprocess.Popen(  # noqa: S603 (our own interpreter and modules)
+            list(argv),
+            env={**os.environ, **(env or {})},
+            cwd=Path(__file__).resolve().parent.parent,
+        )
         self.processes.append((name, process))
         logger.info("started %s (pid %d)", name, process.pid)
 
@@ -67,15 +70,16 @@ class Children:
         return next((name for name, p in self.processes if p.poll() is not None), None)
 
     def stop(self) -> None:
-        for _name, process in reversed(self.processes):
+        """Newest first, each waited for: the vehicles say OFFLINE before the broker goes."""
+        for name, process in reversed(self.processes):
             if process.poll() is None:
                 process.send_signal(signal.SIGTERM)
-        for name, process in reversed(self.processes):
             try:
                 process.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 logger.warning("%s did not stop in 10 s; killing it", name)
                 process.kill()
+                process.wait()
 
 
 class OrderStream(threading.Thread):
@@ -85,7 +89,7 @@ class OrderStream(threading.Thread):
         super().__init__(name="demo-orders", daemon=True)
         self.layout, self.vehicles, self.interval = layout, vehicles, interval
         self.stopped = threading.Event()
-        self.random = random.Random(5050)
+        self.random = random.Random(5050)  # noqa: S311 (demo data, not security)
 
     def run(self) -> None:
         while not self.stopped.wait(self.interval):
@@ -98,12 +102,15 @@ class OrderStream(threading.Thread):
 
     def _top_up(self) -> None:
         open_orders = TransportOrder.objects.filter(
-            status__in=TransportOrder.OPEN_STATUSES, source__map=self.layout).count()
+            status__in=TransportOrder.OPEN_STATUSES, source__map=self.layout
+        ).count()
         if open_orders >= self.vehicles + 1:
             return
         picks = list(Station.objects.filter(map=self.layout, kind=Station.Kind.PICK))
         drops = list(Station.objects.filter(map=self.layout, kind=Station.Kind.DROP))
         if picks and drops:
-            create_transport_order(source=self.random.choice(picks),
-                                   destination=self.random.choice(drops),
-                                   load_id=f"L{self.random.randrange(10**6):06d}")
+            create_transport_order(
+                source=self.random.choice(picks),
+                destination=self.random.choice(drops),
+                load_id=f"L{self.random.randrange(10**6):06d}",
+            )

@@ -66,12 +66,18 @@ class OrderExecution:
     steps_done: set[str] = field(default_factory=set)
 
     @classmethod
-    def plan(cls, *, transport_order_id: int, vda_order_id: str, route: list[str],
-             pickup: str) -> "OrderExecution":
-        return cls(transport_order_id=transport_order_id, vda_order_id=vda_order_id, route=route,
-                   pick_index=route.index(pickup),
-                   # Derived from the order id, so a restarted control recognises them.
-                   pick_action_id=f"{vda_order_id}-pick", drop_action_id=f"{vda_order_id}-drop")
+    def plan(
+        cls, *, transport_order_id: int, vda_order_id: str, route: list[str], pickup: str
+    ) -> "OrderExecution":
+        return cls(
+            transport_order_id=transport_order_id,
+            vda_order_id=vda_order_id,
+            route=route,
+            pick_index=route.index(pickup),
+            # Derived from the order id, so a restarted control recognises them.
+            pick_action_id=f"{vda_order_id}-pick",
+            drop_action_id=f"{vda_order_id}-drop",
+        )
 
     @property
     def action_steps(self) -> dict[str, str]:
@@ -94,13 +100,18 @@ class OrderExecution:
             status = statuses.get(action_id)
             if status == "FAILED":
                 self.phase = Phase.DONE
-                return [*events, Progress("failed", self.transport_order_id,
-                                          {"reason": f"{step} action failed"})]
+                return [
+                    *events,
+                    Progress(
+                        "failed", self.transport_order_id, {"reason": f"{step} action failed"}
+                    ),
+                ]
             if status == "FINISHED" and step not in self.steps_done:
                 self.steps_done.add(step)
                 node = self.route[self.pick_index if step == "pick" else -1]
-                events.append(Progress("step", self.transport_order_id,
-                                       {"step": step, "node": node}))
+                events.append(
+                    Progress("step", self.transport_order_id, {"step": step, "node": node})
+                )
         if self._is_complete(state, statuses):
             self.phase = Phase.DONE
             events.append(Progress("finished", self.transport_order_id))
@@ -147,8 +158,13 @@ class OrderExecution:
 
 
 def build_order(
-    execution: OrderExecution, layout: LayoutIndex, *, load_id: str, load_type: str,
-    pick_station: str, drop_station: str,
+    execution: OrderExecution,
+    layout: LayoutIndex,
+    *,
+    load_id: str,
+    load_type: str,
+    pick_station: str,
+    drop_station: str,
 ) -> tuple[list[vda5050.Node], list[vda5050.Edge]]:
     """The order's nodes and edges in traversal order, all released (the base).
 
@@ -161,29 +177,43 @@ def build_order(
     for index, node_id in enumerate(execution.route):
         if index:
             previous = execution.route[index - 1]
-            edges.append(vda5050.Edge(
-                edge_id=layout.edges[(previous, node_id)], sequence_id=2 * index - 1,
-                released=True, start_node_id=previous, end_node_id=node_id, actions=[],
-            ))
+            edges.append(
+                vda5050.Edge(
+                    edge_id=layout.edges[(previous, node_id)],
+                    sequence_id=2 * index - 1,
+                    released=True,
+                    start_node_id=previous,
+                    end_node_id=node_id,
+                    actions=[],
+                )
+            )
         actions = []
         if index == execution.pick_index:
-            actions.append(_load_action("pick", execution.pick_action_id, load_id, load_type,
-                                        pick_station))
+            actions.append(
+                _load_action("pick", execution.pick_action_id, load_id, load_type, pick_station)
+            )
         if index == last:
-            actions.append(_load_action("drop", execution.drop_action_id, load_id, load_type,
-                                        drop_station))
+            actions.append(
+                _load_action("drop", execution.drop_action_id, load_id, load_type, drop_station)
+            )
         place = layout.nodes[node_id]
-        nodes.append(vda5050.Node(
-            node_id=node_id, sequence_id=2 * index, released=True,
-            node_position=vda5050.NodePosition(x=place.x, y=place.y, theta=place.theta,
-                                               map_id=place.map_id),
-            actions=actions,
-        ))
+        nodes.append(
+            vda5050.Node(
+                node_id=node_id,
+                sequence_id=2 * index,
+                released=True,
+                node_position=vda5050.NodePosition(
+                    x=place.x, y=place.y, theta=place.theta, map_id=place.map_id
+                ),
+                actions=actions,
+            )
+        )
     return nodes, edges
 
 
-def _load_action(action_type: str, action_id: str, load_id: str, load_type: str,
-                 station: str) -> vda5050.Action:
+def _load_action(
+    action_type: str, action_id: str, load_id: str, load_type: str, station: str
+) -> vda5050.Action:
     parameters = [
         vda5050.ActionParameter(key="stationType", value="floor"),
         vda5050.ActionParameter(key="stationName", value=station),
@@ -191,5 +221,9 @@ def _load_action(action_type: str, action_id: str, load_id: str, load_type: str,
     ]
     if load_id:
         parameters.append(vda5050.ActionParameter(key="loadId", value=load_id))
-    return vda5050.Action(action_type=action_type, action_id=action_id,
-                          blocking_type=BlockingType.HARD, action_parameters=parameters)
+    return vda5050.Action(
+        action_type=action_type,
+        action_id=action_id,
+        blocking_type=BlockingType.HARD,
+        action_parameters=parameters,
+    )

@@ -12,9 +12,8 @@ from typing import Any
 import msgspec
 
 import vda5050
-from vda5050.enums import ConnectionState
-
 from control.execution import OrderExecution
+from vda5050.enums import ConnectionState
 
 VehicleKey = tuple[str, str]  # (manufacturer, serial number)
 

@@ -30,7 +30,8 @@ class DjangoStore:
             }
             edges = {
                 (start, end): edge_id
-                for edge_id, start, end in Edge.objects.filter(map=layout).order_by("-length")
+                for edge_id, start, end in Edge.objects.filter(map=layout)
+                .order_by("-length")
                 .values_list("edge_id", "start__node_id", "end__node_id")
             }
             layouts[layout.map_id] = LayoutIndex(layout.map_id, nodes, edges)
@@ -38,19 +39,26 @@ class DjangoStore:
 
     def load_vehicles(self) -> list[dict[str, Any]]:
         close_old_connections()
-        return list(Vehicle.objects.values("pk", "manufacturer", "serial_number",
-                                           "interface_name", "protocol_version"))
+        rows = Vehicle.objects.values(
+            "pk", "manufacturer", "serial_number", "interface_name", "protocol_version"
+        )
+        return [dict(row) for row in rows]
 
     def active_orders(self) -> list[ActiveOrder]:
         close_old_connections()
         return [
             ActiveOrder(
-                transport_order_id=order.pk, vda_order_id=order.vda_order_id,
-                vehicle_pk=order.vehicle_id, route=list(order.route),
-                pickup_node=order.source.node.node_id, map_id=order.source.map.map_id,
+                transport_order_id=order.pk,
+                vda_order_id=order.vda_order_id,
+                vehicle_pk=order.vehicle_id,
+                route=list(order.route),
+                pickup_node=order.source.node.node_id,
+                map_id=order.source.map.map_id,
                 pick_station=order.source.station_id,
-                drop_station=order.destination.station_id, load_id=order.load_id,
-                load_type=order.load_type, cancel_requested=order.cancel_requested,
+                drop_station=order.destination.station_id,
+                load_id=order.load_id,
+                load_type=order.load_type,
+                cancel_requested=order.cancel_requested,
             )
             for order in order_selectors.list_active_orders()
             if order.vehicle_id is not None and order.route
@@ -60,7 +68,8 @@ class DjangoStore:
         """Register new vehicles, bulk-update snapshots, then apply order progress in order."""
         close_old_connections()
         registered = robot_services.register_vehicles(
-            identities=[v.key for v in batch.new_vehicles])
+            identities=[v.key for v in batch.new_vehicles]
+        )
         with transaction.atomic():
             robot_services.save_snapshots(snapshots=batch.snapshots)
             robot_services.save_factsheets(factsheets=batch.factsheets)
@@ -80,8 +89,9 @@ def _apply(progress: Progress) -> None:
     if progress.kind == "started":
         order_services.mark_order_started(order_id=order_id)
     elif progress.kind == "step":
-        order_services.mark_step_reached(order_id=order_id, step=detail["step"],
-                                         node_id=detail["node"])
+        order_services.mark_step_reached(
+            order_id=order_id, step=detail["step"], node_id=detail["node"]
+        )
     elif progress.kind == "finished":
         order_services.mark_order_finished(order_id=order_id)
     elif progress.kind == "failed":

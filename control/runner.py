@@ -8,14 +8,17 @@ from typing import Any
 
 import paho.mqtt.client as mqtt
 
-from vda5050.enums import TopicKind
-
 from control.controller import ActiveOrder, Controller
+from vda5050.enums import TopicKind
 
 logger = logging.getLogger(__name__)
 
-SUBSCRIBED = {TopicKind.STATE: 0, TopicKind.CONNECTION: 1, TopicKind.FACTSHEET: 0,
-              TopicKind.VISUALIZATION: 0}
+SUBSCRIBED = {
+    TopicKind.STATE: 0,
+    TopicKind.CONNECTION: 1,
+    TopicKind.FACTSHEET: 0,
+    TopicKind.VISUALIZATION: 0,
+}
 
 
 class MqttLink:
@@ -43,8 +46,9 @@ class MqttLink:
         if result.rc != mqtt.MQTT_ERR_SUCCESS:
             logger.warning("publish to %s failed (rc=%s)", topic, result.rc)
 
-    def _on_connect(self, client: mqtt.Client, userdata: Any, flags: Any, reason: Any,
-                    properties: Any) -> None:
+    def _on_connect(
+        self, client: mqtt.Client, userdata: Any, flags: Any, reason: Any, properties: Any
+    ) -> None:
         if reason.is_failure:
             logger.error("broker refused the connection: %s", reason)
             return
@@ -53,13 +57,14 @@ class MqttLink:
         logger.info("connected to %s:%s, subscribed to %s/+/+/+/…", self.host, self.port, interface)
         self.connected.set()
 
-    def _on_disconnect(self, client: mqtt.Client, userdata: Any, flags: Any, reason: Any,
-                       properties: Any) -> None:
+    def _on_disconnect(
+        self, client: mqtt.Client, userdata: Any, flags: Any, reason: Any, properties: Any
+    ) -> None:
         self.connected.clear()
         logger.warning("disconnected from broker (%s); paho reconnects", reason)
 
     def _on_message(self, client: mqtt.Client, userdata: Any, message: mqtt.MQTTMessage) -> None:
-        self.controller.handle_message(message.topic, message.payload)
+        self.controller.handle_message(message.topic, bytes(message.payload))
 
 
 class ControlLoop:

@@ -15,13 +15,26 @@ def get_live_layout() -> dict[str, Any] | None:
 def list_vehicle_rows() -> list[dict[str, Any]]:
     """Vehicles in the same shape as control's websocket rows (without the route)."""
     return [
-        {"id": v.pk, "manufacturer": v.manufacturer, "serial": v.serial_number,
-         "status": _status(v), "connection": v.connection, "x": v.x, "y": v.y, "theta": v.theta,
-         "map": v.map_id, "battery": v.battery_charge, "mode": v.operating_mode,
-         "order": v.order_id, "transport_order": None, "last_node": v.last_node_id,
-         "loaded": bool(v.loads), "errors": [f"{e.get('errorLevel')} {e.get('errorType')}"
-                                             for e in v.errors or []],
-         "base": [], "horizon": []}
+        {
+            "id": v.pk,
+            "manufacturer": v.manufacturer,
+            "serial": v.serial_number,
+            "status": _status(v),
+            "connection": v.connection,
+            "x": v.x,
+            "y": v.y,
+            "theta": v.theta,
+            "map": v.map_id,
+            "battery": v.battery_charge,
+            "mode": v.operating_mode,
+            "order": v.order_id,
+            "transport_order": None,
+            "last_node": v.last_node_id,
+            "loaded": bool(v.loads),
+            "errors": [f"{e.get('errorLevel')} {e.get('errorType')}" for e in v.errors or []],
+            "base": [],
+            "horizon": [],
+        }
         for v in Vehicle.objects.all()
     ]
 
@@ -29,14 +42,23 @@ def list_vehicle_rows() -> list[dict[str, Any]]:
 def list_order_rows(limit: int = 50) -> list[dict[str, Any]]:
     """The open orders and the most recent closed ones, newest first."""
     orders = TransportOrder.objects.select_related("source", "destination", "vehicle")
-    rows = list(orders.filter(status__in=TransportOrder.OPEN_STATUSES).order_by("-created_at")[:limit])
-    rows += list(orders.exclude(status__in=TransportOrder.OPEN_STATUSES).order_by("-finished_at")[:limit])
+    rows = list(
+        orders.filter(status__in=TransportOrder.OPEN_STATUSES).order_by("-created_at")[:limit]
+    )
+    rows += list(
+        orders.exclude(status__in=TransportOrder.OPEN_STATUSES).order_by("-finished_at")[:limit]
+    )
     return [
-        {"id": o.pk, "status": o.status, "source": str(o.source), "destination": str(o.destination),
-         "vehicle": o.vehicle.serial_number if o.vehicle else None,
-         "created_at": o.created_at.isoformat(),
-         "finished_at": o.finished_at.isoformat() if o.finished_at else None,
-         "failure_reason": o.failure_reason}
+        {
+            "id": o.pk,
+            "status": o.status,
+            "source": str(o.source),
+            "destination": str(o.destination),
+            "vehicle": o.vehicle.serial_number if o.vehicle else None,
+            "created_at": o.created_at.isoformat(),
+            "finished_at": o.finished_at.isoformat() if o.finished_at else None,
+            "failure_reason": o.failure_reason,
+        }
         for o in rows
     ]
 

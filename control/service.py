@@ -17,8 +17,13 @@ def build_control_loop() -> ControlLoop:
     controller = Controller(store=DjangoStore(), interface_name=settings.VDA5050_INTERFACE)
     client, address = make_client(settings.MQTT_URL, client_id_prefix="fleet-control")
     link = MqttLink(client, address.host, address.port, controller)
-    return ControlLoop(controller, link, receive_commands=receive_commands,
-                       broadcast=_broadcast_vehicles, intervals=settings.FLEET_CONTROL)
+    return ControlLoop(
+        controller,
+        link,
+        receive_commands=receive_commands,
+        broadcast=_broadcast_vehicles,
+        intervals=settings.FLEET_CONTROL,
+    )
 
 
 def _broadcast_vehicles(rows: list[dict[str, Any]]) -> None:

@@ -27,10 +27,19 @@ def row(vehicle: LiveVehicle) -> dict[str, Any]:
         "position_initialized": bool(position and position.position_initialized),
     }
     if state is None:
-        return data | {"battery_charge": None, "charging": False, "driving": False,
-                       "paused": False, "operating_mode": "", "errors": [], "loads": [],
-                       "order_id": "", "order_update_id": None, "last_node_id": "",
-                       "last_node_sequence_id": None}
+        return data | {
+            "battery_charge": None,
+            "charging": False,
+            "driving": False,
+            "paused": False,
+            "operating_mode": "",
+            "errors": [],
+            "loads": [],
+            "order_id": "",
+            "order_update_id": None,
+            "last_node_id": "",
+            "last_node_sequence_id": None,
+        }
     return data | {
         "battery_charge": state.battery_state.battery_charge,
         "charging": state.battery_state.charging,
@@ -47,7 +56,7 @@ def row(vehicle: LiveVehicle) -> dict[str, Any]:
 
 
 def status_label(vehicle: LiveVehicle) -> str:
-    """One word for the live page's colour: offline, error, paused, charging, driving, busy, idle."""
+    """One word for the page's colour: offline, error, paused, charging, driving, busy, idle."""
     state = vehicle.state
     if vehicle.connection != "ONLINE" or state is None:
         return "offline"

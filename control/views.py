@@ -12,11 +12,15 @@ from control import selectors
 @login_required
 def live_page(request: HttpRequest) -> HttpResponse:
     """The fleet live: the layout as SVG, vehicles moving on it, vehicle and order lists."""
-    return render(request, "control/live.html", {
-        "layout": selectors.get_live_layout(),
-        "vehicles": selectors.list_vehicle_rows(),
-        "orders": selectors.list_order_rows(),
-    })
+    return render(
+        request,
+        "control/live.html",
+        {
+            "layout": selectors.get_live_layout(),
+            "vehicles": selectors.list_vehicle_rows(),
+            "orders": selectors.list_order_rows(),
+        },
+    )
 
 
 @login_required

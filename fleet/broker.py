@@ -40,7 +40,9 @@ def main() -> None:
     parser.add_argument("--host", default="127.0.0.1")
     parser.add_argument("--port", type=int, default=11883)
     args = parser.parse_args()
-    logging.basicConfig(level=logging.WARNING, format="%(asctime)s broker %(levelname)s %(message)s")
+    logging.basicConfig(
+        level=logging.WARNING, format="%(asctime)s broker %(levelname)s %(message)s"
+    )
     asyncio.run(serve(args.host, args.port))
 
 

@@ -20,7 +20,7 @@ QUEUE_KEY = "fleet:control:commands"
 _local_queue: "queue.Queue[dict[str, Any]]" = queue.Queue()
 
 
-def _redis() -> "redis.Redis[bytes] | None":
+def _redis() -> redis.Redis | None:
     if not settings.REDIS_URL:
         return None
     return redis.Redis.from_url(settings.REDIS_URL, socket_timeout=5)
@@ -47,8 +47,8 @@ def receive_commands(timeout: float) -> list[dict[str, Any]]:
     first = client.brpop([QUEUE_KEY], timeout=timeout)  # Redis >= 6 takes fractions
     if first is None:
         return []
-    raw = [first[1]]
-    while (more := client.rpop(QUEUE_KEY)) is not None:
+    raw: list[bytes | str] = [first[1]]
+    while isinstance(more := client.rpop(QUEUE_KEY), bytes | str):
         raw.append(more)
     return [_parse(item) for item in raw if item]
 

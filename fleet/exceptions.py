@@ -10,7 +10,7 @@ from rest_framework.views import exception_handler
 class DomainError(Exception):
     """A request that is well-formed but not allowed in the current state (HTTP 409)."""
 
-    http_status = status.HTTP_409_CONFLICT
+    http_status: int = status.HTTP_409_CONFLICT
 
 
 class InvalidRequestError(DomainError):

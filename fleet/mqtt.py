@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from urllib.parse import unquote, urlsplit
 
 import paho.mqtt.client as mqtt
+from paho.mqtt.enums import CallbackAPIVersion
 
 
 @dataclass(frozen=True)
@@ -41,7 +42,7 @@ def make_client(url: str, *, client_id_prefix: str) -> tuple[mqtt.Client, Broker
     """
     address = BrokerAddress.from_url(url)
     client = mqtt.Client(
-        callback_api_version=mqtt.CallbackAPIVersion.VERSION2,
+        callback_api_version=CallbackAPIVersion.VERSION2,
         client_id=f"{client_id_prefix}-{uuid.uuid4().hex[:8]}",
         protocol=mqtt.MQTTv311,
         clean_session=True,

@@ -1,4 +1,4 @@
-"""Broadcasts to browsers over the Channels layer. Domain code sends only through these functions."""
+"""Broadcasts to browsers over the Channels layer; domain code sends only through these."""
 
 import asyncio
 import logging

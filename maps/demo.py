@@ -47,5 +47,10 @@ def warehouse_layout(*, columns: int = 8, rows: int = 5, map_id: str = "demo") -
     for r in (1, 3):
         if r < rows:
             spur("CHARGE", f"CHARGE-{r // 2 + 1}", f"A{columns - 1}.{r}", SPUR, 0.0)
-    return {"mapId": map_id, "name": "Demo warehouse", "nodes": nodes, "edges": edges,
-            "stations": stations}
+    return {
+        "mapId": map_id,
+        "name": "Demo warehouse",
+        "nodes": nodes,
+        "edges": edges,
+        "stations": stations,
+    }

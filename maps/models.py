@@ -23,7 +23,7 @@ class Map(models.Model):
 
 
 class Node(models.Model):
-    """A point of the layout in metres (right-handed, z up); `theta` is the heading to hold, in rad."""
+    """A point of the layout in metres (right-handed, z up); `theta`: heading to hold, rad."""
 
     map = models.ForeignKey(Map, on_delete=models.CASCADE, related_name="nodes")
     node_id = models.CharField(max_length=100)
@@ -55,7 +55,9 @@ class Edge(models.Model):
         ordering = ["map", "edge_id"]
         constraints = [
             models.UniqueConstraint(fields=["map", "edge_id"], name="edge_id_unique_per_map"),
-            models.CheckConstraint(condition=models.Q(length__gte=0), name="edge_length_not_negative"),
+            models.CheckConstraint(
+                condition=models.Q(length__gte=0), name="edge_length_not_negative"
+            ),
         ]
 
     def __str__(self) -> str:

@@ -35,10 +35,22 @@ def layout_as_dict(*, map: Map) -> dict[str, Any]:
         for e in Edge.objects.filter(map=map).select_related("start", "end").order_by("edge_id")
     ]
     stations = [
-        {"id": s.station_id, "name": s.name or s.station_id, "kind": s.kind,
-         "node": s.node.node_id, "x": s.node.x, "y": s.node.y}
+        {
+            "id": s.station_id,
+            "name": s.name or s.station_id,
+            "kind": s.kind,
+            "node": s.node.node_id,
+            "x": s.node.x,
+            "y": s.node.y,
+        }
         for s in Station.objects.filter(map=map).select_related("node").order_by("station_id")
     ]
     parking = [s["node"] for s in stations if s["kind"] == Station.Kind.PARK]
-    return {"mapId": map.map_id, "name": map.name, "nodes": nodes, "edges": edges,
-            "stations": stations, "parking": parking}
+    return {
+        "mapId": map.map_id,
+        "name": map.name,
+        "nodes": nodes,
+        "edges": edges,
+        "stations": stations,
+        "parking": parking,
+    }

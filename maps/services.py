@@ -32,8 +32,13 @@ def create_layout(*, spec: dict[str, Any], replace: bool = False) -> Map:
     by_id = {node.node_id: node for node in nodes}
     Edge.objects.bulk_create(_edge(layout, by_id, e) for e in spec["edges"])
     Station.objects.bulk_create(
-        Station(map=layout, station_id=s["id"], name=s.get("name", ""), kind=s["kind"],
-                node=_node(by_id, s["node"]))
+        Station(
+            map=layout,
+            station_id=s["id"],
+            name=s.get("name", ""),
+            kind=s["kind"],
+            node=_node(by_id, s["node"]),
+        )
         for s in spec.get("stations", [])
     )
     return layout
@@ -41,9 +46,14 @@ def create_layout(*, spec: dict[str, Any], replace: bool = False) -> Map:
 
 def _edge(layout: Map, by_id: dict[str, Node], spec: dict[str, Any]) -> Edge:
     start, end = _node(by_id, spec["start"]), _node(by_id, spec["end"])
-    return Edge(map=layout, edge_id=spec["id"], start=start, end=end,
-                length=math.hypot(end.x - start.x, end.y - start.y),
-                max_speed=spec.get("maxSpeed"))
+    return Edge(
+        map=layout,
+        edge_id=spec["id"],
+        start=start,
+        end=end,
+        length=math.hypot(end.x - start.x, end.y - start.y),
+        max_speed=spec.get("maxSpeed"),
+    )
 
 
 def _node(by_id: dict[str, Node], node_id: str) -> Node:

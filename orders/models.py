@@ -29,16 +29,23 @@ class TransportOrder(models.Model):
     load_type = models.CharField(max_length=100, blank=True, default="EPAL")
     priority = models.IntegerField(default=0, help_text="higher goes first")
     external_ref = models.CharField(max_length=200, blank=True)
-    status = models.CharField(max_length=20, choices=Status.choices, default=Status.NEW,
-                              db_index=True)
-    vehicle = models.ForeignKey("robots.Vehicle", null=True, blank=True,
-                                on_delete=models.PROTECT, related_name="transport_orders")
+    status = models.CharField(
+        max_length=20, choices=Status.choices, default=Status.NEW, db_index=True
+    )
+    vehicle = models.ForeignKey(
+        "robots.Vehicle",
+        null=True,
+        blank=True,
+        on_delete=models.PROTECT,
+        related_name="transport_orders",
+    )
     route = models.JSONField(default=list, blank=True, help_text="node ids to drive")
     vda_order_id = models.CharField(max_length=100, blank=True)
     failure_reason = models.TextField(blank=True)
     cancel_requested = models.BooleanField(default=False)
-    created_by = models.ForeignKey(settings.AUTH_USER_MODEL, null=True, blank=True,
-                                   on_delete=models.SET_NULL, related_name="+")
+    created_by = models.ForeignKey(
+        settings.AUTH_USER_MODEL, null=True, blank=True, on_delete=models.SET_NULL, related_name="+"
+    )
     created_at = models.DateTimeField(auto_now_add=True)
     assigned_at = models.DateTimeField(null=True, blank=True)
     started_at = models.DateTimeField(null=True, blank=True)
@@ -55,8 +62,10 @@ class TransportOrder(models.Model):
                 condition=models.Q(status__in=["ASSIGNED", "IN_PROGRESS"]),
                 name="one_active_order_per_vehicle",
             ),
-            models.CheckConstraint(condition=~models.Q(source=models.F("destination")),
-                                   name="source_is_not_destination"),
+            models.CheckConstraint(
+                condition=~models.Q(source=models.F("destination")),
+                name="source_is_not_destination",
+            ),
         ]
 
     def __str__(self) -> str:

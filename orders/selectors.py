@@ -26,6 +26,6 @@ def list_idle_vehicles() -> list[Vehicle]:
 
 def list_active_orders() -> QuerySet[TransportOrder]:
     """Orders that a vehicle is assigned to or driving: what `control` executes."""
-    return TransportOrder.objects.filter(
-        status__in=TransportOrder.ACTIVE_STATUSES
-    ).select_related("vehicle", "source__node", "destination__node", "source__map")
+    return TransportOrder.objects.filter(status__in=TransportOrder.ACTIVE_STATUSES).select_related(
+        "vehicle", "source__node", "destination__node", "source__map"
+    )

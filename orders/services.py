@@ -3,7 +3,8 @@
 import logging
 from typing import Any
 
-from django.contrib.auth.models import AbstractBaseUser, AnonymousUser
+from django.contrib.auth.base_user import AbstractBaseUser
+from django.contrib.auth.models import AnonymousUser, User
 from django.db import IntegrityError, transaction
 from django.utils import timezone
 
@@ -45,9 +46,13 @@ def create_transport_order(
     except NoRouteError as exc:
         raise InvalidRequestError(f"destination not reachable from source: {exc}") from None
     order = TransportOrder.objects.create(
-        source=source, destination=destination, priority=priority, load_id=load_id,
-        load_type=load_type, external_ref=external_ref,
-        created_by=created_by if isinstance(created_by, AbstractBaseUser) else None,
+        source=source,
+        destination=destination,
+        priority=priority,
+        load_id=load_id,
+        load_type=load_type,
+        external_ref=external_ref,
+        created_by=created_by if isinstance(created_by, User) else None,
     )
     _record(order, OrderEvent.Kind.CREATED, by=_who(created_by))
     _on_commit_dispatch()
@@ -83,11 +88,15 @@ def _nearest_vehicle(
 ) -> tuple[Vehicle, list[str]] | None:
     pickup, drop = order.source.node.node_id, order.destination.node.node_id
     distance_to_pickup = graph.distances_to(pickup)
-    reachable = [v for v in idle if v.map_id == layout.map_id and v.last_node_id in distance_to_pickup]
+    reachable = [
+        v for v in idle if v.map_id == layout.map_id and v.last_node_id in distance_to_pickup
+    ]
     if not reachable:
         return None
     vehicle = min(reachable, key=lambda v: (distance_to_pickup[v.last_node_id], v.pk))
-    route = graph.shortest_path(vehicle.last_node_id, pickup) + graph.shortest_path(pickup, drop)[1:]
+    route = (
+        graph.shortest_path(vehicle.last_node_id, pickup) + graph.shortest_path(pickup, drop)[1:]
+    )
     return vehicle, route
 
 
@@ -97,8 +106,14 @@ def _assign(*, order: TransportOrder, vehicle: Vehicle, route: list[str]) -> boo
         with transaction.atomic():
             claimed = TransportOrder.objects.filter(
                 pk=order.pk, status=Status.NEW, cancel_requested=False
-            ).update(status=Status.ASSIGNED, vehicle=vehicle, route=route, assigned_at=now,
-                     vda_order_id=f"TO-{order.pk}", updated_at=now)
+            ).update(
+                status=Status.ASSIGNED,
+                vehicle=vehicle,
+                route=route,
+                assigned_at=now,
+                vda_order_id=f"TO-{order.pk}",
+                updated_at=now,
+            )
             if not claimed:
                 return False
             _record(order, OrderEvent.Kind.ASSIGNED, vehicle=str(vehicle), route=route)
@@ -126,8 +141,9 @@ def mark_step_reached(*, order_id: int, step: str, node_id: str) -> None:
 @transaction.atomic
 def mark_order_finished(*, order_id: int) -> None:
     """The vehicle drove the whole route and finished its actions."""
-    if _transition(order_id, set(TransportOrder.ACTIVE_STATUSES), Status.FINISHED,
-                   finished_at=timezone.now()):
+    if _transition(
+        order_id, set(TransportOrder.ACTIVE_STATUSES), Status.FINISHED, finished_at=timezone.now()
+    ):
         _record_id(order_id, OrderEvent.Kind.FINISHED)
         _on_commit_dispatch()
 
@@ -135,8 +151,13 @@ def mark_order_finished(*, order_id: int) -> None:
 @transaction.atomic
 def mark_order_failed(*, order_id: int, reason: str) -> None:
     """The order cannot complete (rejected by the vehicle, failed action, fatal error)."""
-    if _transition(order_id, set(TransportOrder.OPEN_STATUSES), Status.FAILED,
-                   finished_at=timezone.now(), failure_reason=reason[:2000]):
+    if _transition(
+        order_id,
+        set(TransportOrder.OPEN_STATUSES),
+        Status.FAILED,
+        finished_at=timezone.now(),
+        failure_reason=reason[:2000],
+    ):
         _record_id(order_id, OrderEvent.Kind.FAILED, reason=reason)
         _on_commit_dispatch()
 
@@ -144,8 +165,9 @@ def mark_order_failed(*, order_id: int, reason: str) -> None:
 @transaction.atomic
 def mark_order_cancelled(*, order_id: int) -> None:
     """The vehicle stopped after a cancel request (control confirmed cancelOrder finished)."""
-    if _transition(order_id, set(TransportOrder.OPEN_STATUSES), Status.CANCELLED,
-                   finished_at=timezone.now()):
+    if _transition(
+        order_id, set(TransportOrder.OPEN_STATUSES), Status.CANCELLED, finished_at=timezone.now()
+    ):
         _record_id(order_id, OrderEvent.Kind.CANCELLED)
         _on_commit_dispatch()
 

@@ -23,8 +23,9 @@ class Vehicle(models.Model):
     interface_name = models.CharField(max_length=100, default="uagv")
     protocol_version = models.CharField(max_length=20, default="2.0.0")
     factsheet = models.JSONField(null=True, blank=True)
-    connection = models.CharField(max_length=20, choices=Connection.choices,
-                                  default=Connection.UNKNOWN)
+    connection = models.CharField(
+        max_length=20, choices=Connection.choices, default=Connection.UNKNOWN
+    )
     # Live snapshot (owned by control).
     map_id = models.CharField(max_length=100, blank=True)
     x = models.FloatField(null=True, blank=True)
@@ -49,8 +50,9 @@ class Vehicle(models.Model):
     class Meta:
         ordering = ["manufacturer", "serial_number"]
         constraints = [
-            models.UniqueConstraint(fields=["manufacturer", "serial_number"],
-                                    name="vehicle_identity_unique"),
+            models.UniqueConstraint(
+                fields=["manufacturer", "serial_number"], name="vehicle_identity_unique"
+            ),
         ]
 
     def __str__(self) -> str:

@@ -8,9 +8,25 @@ from django.db import transaction
 from robots.models import Vehicle
 
 SNAPSHOT_FIELDS = [
-    "connection", "protocol_version", "interface_name", "map_id", "x", "y", "theta",
-    "position_initialized", "battery_charge", "charging", "driving", "paused", "operating_mode",
-    "errors", "loads", "order_id", "order_update_id", "last_node_id", "last_node_sequence_id",
+    "connection",
+    "protocol_version",
+    "interface_name",
+    "map_id",
+    "x",
+    "y",
+    "theta",
+    "position_initialized",
+    "battery_charge",
+    "charging",
+    "driving",
+    "paused",
+    "operating_mode",
+    "errors",
+    "loads",
+    "order_id",
+    "order_update_id",
+    "last_node_id",
+    "last_node_sequence_id",
     "last_seen",
 ]
 

@@ -24,7 +24,8 @@ class TransportOrderListCreateApi(generics.ListAPIView[TransportOrder]):
 
     def get_queryset(self) -> Any:
         orders = TransportOrder.objects.select_related(
-            "source", "destination", "vehicle").prefetch_related("events")
+            "source", "destination", "vehicle"
+        ).prefetch_related("events")
         wanted = self.request.query_params.get("status")
         return orders.filter(status=wanted.upper()) if wanted else orders
 
@@ -45,6 +46,8 @@ class TransportOrderCancelApi(APIView):
         data = TransportOrderCancelSerializer(data=request.data)
         data.is_valid(raise_exception=True)
         order = services.cancel_transport_order(
-            order=get_object_or_404(TransportOrder, pk=pk), reason=data.validated_data["reason"],
-            by=request.user)
+            order=get_object_or_404(TransportOrder, pk=pk),
+            reason=data.validated_data["reason"],
+            by=request.user,
+        )
         return Response(TransportOrderSerializer(order).data)

@@ -25,8 +25,15 @@ class FakeStore:
         return {"demo": LINE}
 
     def load_vehicles(self) -> list[dict[str, Any]]:
-        return [{"pk": 1, "manufacturer": "sim", "serial_number": "AGV-1",
-                 "interface_name": "uagv", "protocol_version": "2.0.0"}]
+        return [
+            {
+                "pk": 1,
+                "manufacturer": "sim",
+                "serial_number": "AGV-1",
+                "interface_name": "uagv",
+                "protocol_version": "2.0.0",
+            }
+        ]
 
     def active_orders(self) -> list[ActiveOrder]:
         return self.orders
@@ -42,34 +49,70 @@ class FakeStore:
 
 
 def order(route: list[str] | None = None, **kwargs: Any) -> ActiveOrder:
-    return ActiveOrder(transport_order_id=7, vda_order_id="TO-7", vehicle_pk=1,
-                       route=route or ["a", "b", "c", "d"], pickup_node="b", map_id="demo",
-                       pick_station="PICK-1", drop_station="DROP-1", **kwargs)
+    return ActiveOrder(
+        transport_order_id=7,
+        vda_order_id="TO-7",
+        vehicle_pk=1,
+        route=route or ["a", "b", "c", "d"],
+        pickup_node="b",
+        map_id="demo",
+        pick_station="PICK-1",
+        drop_station="DROP-1",
+        **kwargs,
+    )
 
 
-def state(*, header_id: int = 1, order_id: str = "", last_node: str = "a", nodes: tuple[str, ...] = (),
-          actions: tuple[tuple[str, str], ...] = (), errors: tuple[tuple[str, str, str], ...] = (),
-          driving: bool = False, serial: str = "AGV-1") -> bytes:
+def state(
+    *,
+    header_id: int = 1,
+    order_id: str = "",
+    last_node: str = "a",
+    nodes: tuple[str, ...] = (),
+    actions: tuple[tuple[str, str], ...] = (),
+    errors: tuple[tuple[str, str, str], ...] = (),
+    driving: bool = False,
+    serial: str = "AGV-1",
+) -> bytes:
     """An encoded 2.0.0 state: `nodes` still to drive, `actions` (id, status), `errors`
     (type, level, referenced orderId)."""
     message = vda5050.State(
-        header_id=header_id, timestamp="2026-01-01T00:00:00.00Z", version="2.0.0",
-        manufacturer="sim", serial_number=serial, order_id=order_id, order_update_id=0,
-        last_node_id=last_node, last_node_sequence_id=0, driving=driving,
+        header_id=header_id,
+        timestamp="2026-01-01T00:00:00.00Z",
+        version="2.0.0",
+        manufacturer="sim",
+        serial_number=serial,
+        order_id=order_id,
+        order_update_id=0,
+        last_node_id=last_node,
+        last_node_sequence_id=0,
+        driving=driving,
         operating_mode=vda5050.OperatingMode.AUTOMATIC,
-        node_states=[vda5050.NodeState(node_id=n, sequence_id=2 * (i + 1), released=True)
-                     for i, n in enumerate(nodes)],
-        edge_states=[vda5050.EdgeState(edge_id=f"e{i}", sequence_id=2 * i + 1, released=True)
-                     for i, _ in enumerate(nodes)],
-        action_states=[vda5050.ActionState(action_id=a, action_status=vda5050.ActionStatus(s))
-                       for a, s in actions],
+        node_states=[
+            vda5050.NodeState(node_id=n, sequence_id=2 * (i + 1), released=True)
+            for i, n in enumerate(nodes)
+        ],
+        edge_states=[
+            vda5050.EdgeState(edge_id=f"e{i}", sequence_id=2 * i + 1, released=True)
+            for i, _ in enumerate(nodes)
+        ],
+        action_states=[
+            vda5050.ActionState(action_id=a, action_status=vda5050.ActionStatus(s))
+            for a, s in actions
+        ],
         battery_state=vda5050.BatteryState(battery_charge=80.0, charging=False),
-        errors=[vda5050.Error(error_type=t, error_level=vda5050.ErrorLevel(level),
-                              error_references=[vda5050.ErrorReference(reference_key="orderId",
-                                                                       reference_value=ref)])
-                for t, level, ref in errors],
+        errors=[
+            vda5050.Error(
+                error_type=t,
+                error_level=vda5050.ErrorLevel(level),
+                error_references=[
+                    vda5050.ErrorReference(reference_key="orderId", reference_value=ref)
+                ],
+            )
+            for t, level, ref in errors
+        ],
         safety_state=vda5050.SafetyState(e_stop=vda5050.EStop.NONE, field_violation=False),
-        agv_position=vda5050.AgvPosition(x=0.0, y=0.0, theta=0.0, map_id="demo",
-                                         position_initialized=True),
+        agv_position=vda5050.AgvPosition(
+            x=0.0, y=0.0, theta=0.0, map_id="demo", position_initialized=True
+        ),
     )
     return vda5050.encode(message)

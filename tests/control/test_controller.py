@@ -16,8 +16,11 @@ def sent() -> list[tuple[str, dict]]:
 
 @pytest.fixture
 def controller(sent) -> Controller:
-    ctrl = Controller(store=FakeStore(), interface_name="uagv",
-                      publish=lambda topic, payload, qos: sent.append((topic, json.loads(payload))))
+    ctrl = Controller(
+        store=FakeStore(),
+        interface_name="uagv",
+        publish=lambda topic, payload, qos: sent.append((topic, json.loads(payload))),
+    )
     ctrl.load()
     return ctrl
 
@@ -29,7 +32,8 @@ def test_an_idle_available_vehicle_gets_the_assigned_order(controller, sent) -> 
 
     topic, message = sent[0]
     assert topic == "uagv/v2/sim/AGV-1/order"
-    assert message["orderId"] == "TO-7" and message["orderUpdateId"] == 0
+    assert message["orderId"] == "TO-7"
+    assert message["orderUpdateId"] == 0
     assert [n["nodeId"] for n in message["nodes"]] == ["a", "b", "c", "d"]
     assert message["headerId"] == 0
 
@@ -51,18 +55,43 @@ def test_progress_from_state_goes_to_the_flusher_in_order(controller) -> None:
     vehicle = controller.fleet.by_pk(1)
     ids = (vehicle.execution.pick_action_id, vehicle.execution.drop_action_id)
 
-    controller.handle_message(STATE_TOPIC, state(header_id=2, order_id="TO-7", nodes=("b", "c", "d"),
-                                                 actions=((ids[0], "WAITING"), (ids[1], "WAITING"))))
-    controller.handle_message(STATE_TOPIC, state(header_id=3, order_id="TO-7", last_node="b",
-                                                 nodes=("c", "d"),
-                                                 actions=((ids[0], "FINISHED"), (ids[1], "WAITING"))))
-    controller.handle_message(STATE_TOPIC, state(header_id=4, order_id="TO-7", last_node="d",
-                                                 actions=((ids[0], "FINISHED"), (ids[1], "FINISHED"))))
+    controller.handle_message(
+        STATE_TOPIC,
+        state(
+            header_id=2,
+            order_id="TO-7",
+            nodes=("b", "c", "d"),
+            actions=((ids[0], "WAITING"), (ids[1], "WAITING")),
+        ),
+    )
+    controller.handle_message(
+        STATE_TOPIC,
+        state(
+            header_id=3,
+            order_id="TO-7",
+            last_node="b",
+            nodes=("c", "d"),
+            actions=((ids[0], "FINISHED"), (ids[1], "WAITING")),
+        ),
+    )
+    controller.handle_message(
+        STATE_TOPIC,
+        state(
+            header_id=4,
+            order_id="TO-7",
+            last_node="d",
+            actions=((ids[0], "FINISHED"), (ids[1], "FINISHED")),
+        ),
+    )
     controller.flush()
 
     batch = controller.store.batches[-1]
     assert [(p.kind, p.detail.get("step")) for p in batch.progress] == [
-        ("started", None), ("step", "pick"), ("step", "drop"), ("finished", None)]
+        ("started", None),
+        ("step", "pick"),
+        ("step", "drop"),
+        ("finished", None),
+    ]
     assert vehicle.execution is None
     assert batch.snapshots[0]["last_node_id"] == "d"
 
@@ -71,19 +100,27 @@ def test_a_rejected_order_fails_with_the_vehicle_error(controller) -> None:
     controller.handle_message(STATE_TOPIC, state())
     controller.sync([order()])
 
-    controller.handle_message(STATE_TOPIC, state(header_id=2, errors=(
-        ("validationError", "WARNING", "TO-7"),)))
+    controller.handle_message(
+        STATE_TOPIC, state(header_id=2, errors=(("validationError", "WARNING", "TO-7"),))
+    )
     controller.flush()
 
     failed = controller.store.batches[-1].progress[-1]
-    assert failed.kind == "failed" and "validationError" in failed.detail["reason"]
+    assert failed.kind == "failed"
+    assert "validationError" in failed.detail["reason"]
 
 
 def test_restarted_control_adopts_a_running_order_without_resending(controller, sent) -> None:
-    controller.handle_message(STATE_TOPIC, state(order_id="TO-7", last_node="b", nodes=("c", "d"),
-                                                 driving=True,
-                                                 actions=(("TO-7-pick", "FINISHED"),
-                                                          ("TO-7-drop", "WAITING"))))
+    controller.handle_message(
+        STATE_TOPIC,
+        state(
+            order_id="TO-7",
+            last_node="b",
+            nodes=("c", "d"),
+            driving=True,
+            actions=(("TO-7-pick", "FINISHED"), ("TO-7-drop", "WAITING")),
+        ),
+    )
 
     controller.sync([order()])
 
@@ -98,16 +135,21 @@ def test_cancel_request_sends_cancel_order_and_completes_when_it_finishes(contro
 
     controller.sync([order(cancel_requested=True)])
     cancel = sent[-1][1]["actions"][0]
-    controller.handle_message(STATE_TOPIC, state(header_id=3, order_id="TO-7",
-                                                 actions=((cancel["actionId"], "FINISHED"),)))
+    controller.handle_message(
+        STATE_TOPIC,
+        state(header_id=3, order_id="TO-7", actions=((cancel["actionId"], "FINISHED"),)),
+    )
     controller.flush()
 
-    assert sent[-1][0].endswith("/instantActions") and cancel["actionType"] == "cancelOrder"
+    assert sent[-1][0].endswith("/instantActions")
+    assert cancel["actionType"] == "cancelOrder"
     assert controller.store.batches[-1].progress[-1].kind == "cancelled"
 
 
-@pytest.mark.parametrize("payload", [b"", b"{", b"[" * 100_000, b'{"headerId": NaN}',
-                                     b"\xff\xfe", b'{"headerId": "x"}', b"null"])
+@pytest.mark.parametrize(
+    "payload",
+    [b"", b"{", b"[" * 100_000, b'{"headerId": NaN}', b"\xff\xfe", b'{"headerId": "x"}', b"null"],
+)
 def test_malformed_messages_are_counted_and_change_nothing(controller, payload) -> None:
     controller.handle_message(STATE_TOPIC, payload)
     controller.handle_message("not/a/topic", b"{}")
@@ -152,12 +194,22 @@ def test_other_interfaces_and_own_echoes_are_ignored(controller) -> None:
 def test_an_order_finished_in_memory_is_not_adopted_again_before_the_flush(controller) -> None:
     controller.handle_message(STATE_TOPIC, state())
     controller.sync([order()])
-    controller.handle_message(STATE_TOPIC, state(header_id=2, order_id="TO-7", last_node="d",
-                                                 actions=(("TO-7-pick", "FINISHED"),
-                                                          ("TO-7-drop", "FINISHED"))))
+    controller.handle_message(
+        STATE_TOPIC,
+        state(
+            header_id=2,
+            order_id="TO-7",
+            last_node="d",
+            actions=(("TO-7-pick", "FINISHED"), ("TO-7-drop", "FINISHED")),
+        ),
+    )
 
     controller.sync([order()])  # the database still lists it as active
     controller.flush()
 
     assert [p.kind for p in controller.store.batches[-1].progress] == [
-        "started", "step", "step", "finished"]
+        "started",
+        "step",
+        "step",
+        "finished",
+    ]

@@ -22,13 +22,25 @@ def free_port() -> int:
 class Process:
     """A child process whose combined output goes to a log file, shown when a test fails."""
 
-    def __init__(self, name: str, argv: list[str], env: dict[str, str], log_dir: Path,
-                 new_session: bool = False) -> None:
+    def __init__(
+        self,
+        name: str,
+        argv: list[str],
+        env: dict[str, str],
+        log_dir: Path,
+        new_session: bool = False,
+    ) -> None:
         self.name = name
         self.log_path = log_dir / f"{name}.log"
         self._log: IO[bytes] = self.log_path.open("wb")
-        self.popen = subprocess.Popen(argv, cwd=ROOT, env=env, stdout=self._log,
-                                      stderr=subprocess.STDOUT, start_new_session=new_session)
+        self.popen = subprocess.Popen(
+            argv,
+            cwd=ROOT,
+            env=env,
+            stdout=self._log,
+            stderr=subprocess.STDOUT,
+            start_new_session=new_session,
+        )
 
     def output(self) -> str:
         self._log.flush()
@@ -54,8 +66,13 @@ def python(*args: str) -> list[str]:
     return [sys.executable, *args]
 
 
-def wait_until(condition: Callable[[], object], timeout: float, message: str,
-               processes: list[Process] = (), interval: float = 0.5) -> object:  # type: ignore[assignment]
+def wait_until(
+    condition: Callable[[], object],
+    timeout: float,
+    message: str,
+    processes: list[Process] = (),
+    interval: float = 0.5,
+) -> object:  # type: ignore[assignment]
     """Poll `condition` until truthy; fail with the processes' output if a process died."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:

@@ -33,21 +33,39 @@ def positions(base: str) -> dict[str, tuple[float, float]]:
     status, body = get(f"{base}/api/v1/vehicles/", auth=True)
     if status != 200:
         return {}
-    return {v["serial_number"]: (v["x"], v["y"]) for v in json.loads(body)["results"]
-            if v["x"] is not None}
+    return {
+        v["serial_number"]: (v["x"], v["y"])
+        for v in json.loads(body)["results"]
+        if v["x"] is not None
+    }
 
 
 def test_make_demo_serves_moving_vehicles_and_stops_cleanly(tmp_path: Path) -> None:
     port = free_port()
-    env = {key: value for key, value in os.environ.items()
-           if key not in {"DATABASE_URL", "REDIS_URL", "MQTT_URL", "DJANGO_SETTINGS_MODULE"}
-           and not key.startswith("PYTEST")}
-    env |= {"DATABASE_URL": f"sqlite:///{tmp_path}/demo.sqlite3",
-            "MQTT_EMBEDDED_PORT": str(free_port()), "VDA5050_INTERFACE": "uagv"}
+    env = {
+        key: value
+        for key, value in os.environ.items()
+        if key not in {"DATABASE_URL", "REDIS_URL", "MQTT_URL", "DJANGO_SETTINGS_MODULE"}
+        and not key.startswith("PYTEST")
+    }
+    env |= {
+        "DATABASE_URL": f"sqlite:///{tmp_path}/demo.sqlite3",
+        "MQTT_EMBEDDED_PORT": str(free_port()),
+        "VDA5050_INTERFACE": "uagv",
+    }
     started = time.monotonic()
-    demo = Process("demo", ["make", "--no-print-directory", "demo",
-                            f"DEMO_ARGS=--port {port} --vehicles 2 --time-scale 5"],
-                   env, tmp_path, new_session=True)
+    demo = Process(
+        "demo",
+        [
+            "make",
+            "--no-print-directory",
+            "demo",
+            f"DEMO_ARGS=--port {port} --vehicles 2 --time-scale 5",
+        ],
+        env,
+        tmp_path,
+        new_session=True,
+    )
     base = f"http://127.0.0.1:{port}"
     try:
         wait_until(lambda: get(f"{base}/health")[0] == 200, 120, "demo serves /health", [demo])
@@ -55,8 +73,12 @@ def test_make_demo_serves_moving_vehicles_and_stops_cleanly(tmp_path: Path) -> N
         status, _ = get(f"{base}/")
         assert status in (200, 302)  # the live page asks for a login
         first = wait_until(lambda: positions(base), 60, "vehicles report positions", [demo])
-        wait_until(lambda: any(positions(base).get(k) != v for k, v in first.items()), 60,
-                   "a vehicle moves", [demo])
+        wait_until(
+            lambda: any(positions(base).get(k) != v for k, v in first.items()),
+            60,
+            "a vehicle moves",
+            [demo],
+        )
     finally:
         code = demo.terminate(timeout=30)
     output = demo.output()

@@ -27,8 +27,9 @@ def test_every_station_reaches_every_other(demo_map) -> None:
 
 def test_edge_length_is_the_distance_between_its_nodes(demo_map) -> None:
     for edge in Edge.objects.filter(map=demo_map).select_related("start", "end")[:20]:
-        assert edge.length == pytest.approx(math.dist((edge.start.x, edge.start.y),
-                                                      (edge.end.x, edge.end.y)))
+        assert edge.length == pytest.approx(
+            math.dist((edge.start.x, edge.start.y), (edge.end.x, edge.end.y))
+        )
 
 
 def test_creating_a_map_twice_needs_replace(demo_map) -> None:
@@ -44,8 +45,11 @@ def test_creating_a_map_twice_needs_replace(demo_map) -> None:
 
 @pytest.mark.django_db
 def test_an_edge_to_an_unknown_node_is_refused_and_nothing_is_written() -> None:
-    spec = {"mapId": "bad", "nodes": [{"id": "a", "x": 0, "y": 0}],
-            "edges": [{"id": "e", "start": "a", "end": "missing"}]}
+    spec = {
+        "mapId": "bad",
+        "nodes": [{"id": "a", "x": 0, "y": 0}],
+        "edges": [{"id": "e", "start": "a", "end": "missing"}],
+    }
     with pytest.raises(InvalidRequestError, match="missing"):
         create_layout(spec=spec)
 

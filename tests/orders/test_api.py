@@ -13,8 +13,11 @@ def api(db: None) -> APIClient:
 
 
 def test_post_creates_an_order_by_station_ids(api, demo_map) -> None:
-    response = api.post("/api/v1/orders/", {"source": "PICK-1", "destination": "DROP-3",
-                                            "load_id": "PAL-7"}, format="json")
+    response = api.post(
+        "/api/v1/orders/",
+        {"source": "PICK-1", "destination": "DROP-3", "load_id": "PAL-7"},
+        format="json",
+    )
 
     assert response.status_code == 201, response.content
     assert response.json()["status"] == "NEW"
@@ -22,11 +25,14 @@ def test_post_creates_an_order_by_station_ids(api, demo_map) -> None:
     assert TransportOrder.objects.get().load_id == "PAL-7"
 
 
-@pytest.mark.parametrize(("body", "field"), [
-    ({"source": "NOPE", "destination": "DROP-1"}, "source"),
-    ({"source": "PICK-1"}, "destination"),
-    ({"source": "PICK-1", "destination": "DROP-1", "priority": "high"}, "priority"),
-])
+@pytest.mark.parametrize(
+    ("body", "field"),
+    [
+        ({"source": "NOPE", "destination": "DROP-1"}, "source"),
+        ({"source": "PICK-1"}, "destination"),
+        ({"source": "PICK-1", "destination": "DROP-1", "priority": "high"}, "priority"),
+    ],
+)
 def test_bad_input_gets_400_with_the_field_and_writes_nothing(api, demo_map, body, field) -> None:
     response = api.post("/api/v1/orders/", body, format="json")
 
@@ -36,16 +42,18 @@ def test_bad_input_gets_400_with_the_field_and_writes_nothing(api, demo_map, bod
 
 
 def test_same_station_is_422_with_a_reason(api, demo_map) -> None:
-    response = api.post("/api/v1/orders/", {"source": "PICK-1", "destination": "PICK-1"},
-                        format="json")
+    response = api.post(
+        "/api/v1/orders/", {"source": "PICK-1", "destination": "PICK-1"}, format="json"
+    )
 
     assert response.status_code == 422
     assert "same station" in response.json()["detail"]
 
 
 def test_list_filters_by_status_and_cancel_of_a_closed_order_is_409(api, demo_map) -> None:
-    created = api.post("/api/v1/orders/", {"source": "PICK-1", "destination": "DROP-1"},
-                       format="json").json()
+    created = api.post(
+        "/api/v1/orders/", {"source": "PICK-1", "destination": "DROP-1"}, format="json"
+    ).json()
     api.post(f"/api/v1/orders/{created['id']}/cancel/", {"reason": "test"}, format="json")
 
     cancelled = api.get("/api/v1/orders/?status=cancelled").json()

@@ -13,8 +13,9 @@ def station(demo_map, station_id: str) -> Station:
 
 
 def test_create_queues_an_order_with_a_created_event(demo_map) -> None:
-    order = services.create_transport_order(source=station(demo_map, "PICK-1"),
-                                            destination=station(demo_map, "DROP-2"), load_id="L1")
+    order = services.create_transport_order(
+        source=station(demo_map, "PICK-1"), destination=station(demo_map, "DROP-2"), load_id="L1"
+    )
 
     assert order.status == TransportOrder.Status.NEW
     assert list(order.events.values_list("kind", flat=True)) == [OrderEvent.Kind.CREATED]
@@ -30,15 +31,18 @@ def test_create_refuses_the_same_station_twice(demo_map) -> None:
 def test_dispatch_assigns_the_nearest_idle_vehicle_with_a_route_via_the_source(demo_map) -> None:
     far = VehicleFactory(last_node_id="A0.0")
     near = VehicleFactory(last_node_id="A1.3")  # next to PICK-1's aisle node
-    order = TransportOrder.objects.create(source=station(demo_map, "PICK-1"),
-                                          destination=station(demo_map, "DROP-4"))
+    order = TransportOrder.objects.create(
+        source=station(demo_map, "PICK-1"), destination=station(demo_map, "DROP-4")
+    )
 
     assigned = services.dispatch_pending_orders()
 
     order.refresh_from_db()
     assert assigned == [order]
-    assert order.vehicle == near and order.status == TransportOrder.Status.ASSIGNED
-    assert order.route[0] == "A1.3" and order.route[-1] == "S-DROP-4"
+    assert order.vehicle == near
+    assert order.status == TransportOrder.Status.ASSIGNED
+    assert order.route[0] == "A1.3"
+    assert order.route[-1] == "S-DROP-4"
     assert "S-PICK-1" in order.route
     assert order.vda_order_id == f"TO-{order.pk}"
     assert far.transport_orders.count() == 0
@@ -49,18 +53,21 @@ def test_dispatch_skips_unavailable_vehicles(demo_map) -> None:
     VehicleFactory(operating_mode="MANUAL")
     VehicleFactory(errors=[{"errorType": "x", "errorLevel": "FATAL"}])
     VehicleFactory(last_node_id="")
-    TransportOrder.objects.create(source=station(demo_map, "PICK-1"),
-                                  destination=station(demo_map, "DROP-1"))
+    TransportOrder.objects.create(
+        source=station(demo_map, "PICK-1"), destination=station(demo_map, "DROP-1")
+    )
 
     assert services.dispatch_pending_orders() == []
 
 
 def test_dispatch_gives_one_order_per_vehicle_most_urgent_first(demo_map) -> None:
     VehicleFactory()
-    low = TransportOrder.objects.create(source=station(demo_map, "PICK-1"),
-                                        destination=station(demo_map, "DROP-1"))
-    high = TransportOrder.objects.create(source=station(demo_map, "PICK-2"),
-                                         destination=station(demo_map, "DROP-2"), priority=5)
+    low = TransportOrder.objects.create(
+        source=station(demo_map, "PICK-1"), destination=station(demo_map, "DROP-1")
+    )
+    high = TransportOrder.objects.create(
+        source=station(demo_map, "PICK-2"), destination=station(demo_map, "DROP-2"), priority=5
+    )
 
     assert services.dispatch_pending_orders() == [high]
     assert services.dispatch_pending_orders() == []  # the vehicle is busy now
@@ -70,8 +77,12 @@ def test_dispatch_gives_one_order_per_vehicle_most_urgent_first(demo_map) -> Non
 
 def test_database_refuses_two_active_orders_for_one_vehicle(demo_map) -> None:
     vehicle = VehicleFactory()
-    common = {"source": station(demo_map, "PICK-1"), "destination": station(demo_map, "DROP-1"),
-              "vehicle": vehicle, "status": TransportOrder.Status.ASSIGNED}
+    common = {
+        "source": station(demo_map, "PICK-1"),
+        "destination": station(demo_map, "DROP-1"),
+        "vehicle": vehicle,
+        "status": TransportOrder.Status.ASSIGNED,
+    }
     TransportOrder.objects.create(**common)
     with pytest.raises(IntegrityError):
         TransportOrder.objects.create(**common)
@@ -79,9 +90,12 @@ def test_database_refuses_two_active_orders_for_one_vehicle(demo_map) -> None:
 
 def test_progress_transitions_are_recorded_once(demo_map) -> None:
     vehicle = VehicleFactory()
-    order = TransportOrder.objects.create(source=station(demo_map, "PICK-1"),
-                                          destination=station(demo_map, "DROP-1"),
-                                          vehicle=vehicle, status=TransportOrder.Status.ASSIGNED)
+    order = TransportOrder.objects.create(
+        source=station(demo_map, "PICK-1"),
+        destination=station(demo_map, "DROP-1"),
+        vehicle=vehicle,
+        status=TransportOrder.Status.ASSIGNED,
+    )
 
     services.mark_order_started(order_id=order.pk)
     services.mark_order_started(order_id=order.pk)  # a repeated flush changes nothing
@@ -90,13 +104,16 @@ def test_progress_transitions_are_recorded_once(demo_map) -> None:
 
     order.refresh_from_db()
     assert order.status == TransportOrder.Status.FINISHED
-    assert order.started_at and order.finished_at and not order.failure_reason
+    assert order.started_at
+    assert order.finished_at
+    assert not order.failure_reason
     assert list(order.events.values_list("kind", flat=True)) == ["STARTED", "FINISHED"]
 
 
 def test_cancel_of_a_new_order_is_immediate(demo_map) -> None:
-    order = services.create_transport_order(source=station(demo_map, "PICK-1"),
-                                            destination=station(demo_map, "DROP-1"))
+    order = services.create_transport_order(
+        source=station(demo_map, "PICK-1"), destination=station(demo_map, "DROP-1")
+    )
 
     services.cancel_transport_order(order=order, reason="not needed")
 
@@ -106,18 +123,22 @@ def test_cancel_of_a_new_order_is_immediate(demo_map) -> None:
         services.cancel_transport_order(order=order)
 
 
-def test_cancel_of_an_assigned_order_asks_control(demo_map, django_capture_on_commit_callbacks,
-                                                  monkeypatch) -> None:
+def test_cancel_of_an_assigned_order_asks_control(
+    demo_map, django_capture_on_commit_callbacks, monkeypatch
+) -> None:
     sent = []
     monkeypatch.setattr(services, "send_command", lambda kind, **kw: sent.append((kind, kw)))
-    order = TransportOrder.objects.create(source=station(demo_map, "PICK-1"),
-                                          destination=station(demo_map, "DROP-1"),
-                                          vehicle=VehicleFactory(),
-                                          status=TransportOrder.Status.ASSIGNED)
+    order = TransportOrder.objects.create(
+        source=station(demo_map, "PICK-1"),
+        destination=station(demo_map, "DROP-1"),
+        vehicle=VehicleFactory(),
+        status=TransportOrder.Status.ASSIGNED,
+    )
 
     with django_capture_on_commit_callbacks(execute=True):
         services.cancel_transport_order(order=order, reason="wrong pallet")
 
     order.refresh_from_db()
-    assert order.status == TransportOrder.Status.ASSIGNED and order.cancel_requested
+    assert order.status == TransportOrder.Status.ASSIGNED
+    assert order.cancel_requested
     assert sent == [("order.cancel", {"order": order.pk})]

@@ -5,8 +5,12 @@ from traffic.routing import GraphEdge
 
 
 def line_graph() -> RoutingGraph:
-    edges = [GraphEdge("ab", "a", "b", 1.0), GraphEdge("bc", "b", "c", 2.0),
-             GraphEdge("ac", "a", "c", 5.0), GraphEdge("cb", "c", "b", 2.0)]
+    edges = [
+        GraphEdge("ab", "a", "b", 1.0),
+        GraphEdge("bc", "b", "c", 2.0),
+        GraphEdge("ac", "a", "c", 5.0),
+        GraphEdge("cb", "c", "b", 2.0),
+    ]
     return RoutingGraph(["a", "b", "c", "d"], edges)
 
 
@@ -36,7 +40,8 @@ def test_distances_to_goal_follow_edge_direction() -> None:
 
 
 def test_parallel_edges_keep_the_shortest() -> None:
-    graph = RoutingGraph(["a", "b"], [GraphEdge("long", "a", "b", 9.0),
-                                      GraphEdge("short", "a", "b", 1.0)])
+    graph = RoutingGraph(
+        ["a", "b"], [GraphEdge("long", "a", "b", 9.0), GraphEdge("short", "a", "b", 1.0)]
+    )
     assert graph.edge_between("a", "b").edge_id == "short"
     assert graph.path_length(["a", "b"]) == 1.0

@@ -16,6 +16,7 @@ class Command(BaseCommand):
         loop = build_control_loop()
         signal.signal(signal.SIGTERM, lambda *_: loop.stop())
         signal.signal(signal.SIGINT, lambda *_: loop.stop())
-        self.stdout.write(f"control: broker {settings.MQTT_URL}, interface "
-                          f"{settings.VDA5050_INTERFACE}")
+        self.stdout.write(
+            f"control: broker {settings.MQTT_URL}, interface {settings.VDA5050_INTERFACE}"
+        )
         loop.run()  # returns after a clean shutdown

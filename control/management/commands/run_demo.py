@@ -17,7 +17,14 @@ from django.conf import settings
 from django.core.management import call_command
 from django.core.management.base import BaseCommand, CommandParser
 
-from control.demo import DEMO_PASSWORD, DEMO_USER, Children, OrderStream, ensure_demo_data, wait_for_port
+from control.demo import (
+    DEMO_PASSWORD,
+    DEMO_USER,
+    Children,
+    OrderStream,
+    ensure_demo_data,
+    wait_for_port,
+)
 from control.service import build_control_loop
 from fleet.mqtt import BrokerAddress
 from maps.selectors import layout_as_dict
@@ -30,8 +37,12 @@ class Command(BaseCommand):
         parser.add_argument("--host", default="127.0.0.1")
         parser.add_argument("--port", type=int, default=8000)
         parser.add_argument("--vehicles", type=int, default=4)
-        parser.add_argument("--time-scale", type=float, default=2.0,
-                            help="simulated time runs this many times faster")
+        parser.add_argument(
+            "--time-scale",
+            type=float,
+            default=2.0,
+            help="simulated time runs this many times faster",
+        )
         parser.add_argument("--no-orders", action="store_true", help="no automatic orders")
 
     def handle(self, *args: Any, **options: Any) -> None:
@@ -47,9 +58,12 @@ class Command(BaseCommand):
             if not options["no_orders"]:
                 orders.start()
             url = f"http://{options['host']}:{options['port']}/"
-            self.stdout.write(self.style.SUCCESS(
-                f"Open Fleet demo: {url}  (login {DEMO_USER} / {DEMO_PASSWORD}), "
-                f"{options['vehicles']} vehicles, ready in {time.monotonic() - started:.1f} s"))
+            self.stdout.write(
+                self.style.SUCCESS(
+                    f"Open Fleet demo: {url}  (login {DEMO_USER} / {DEMO_PASSWORD}), "
+                    f"{options['vehicles']} vehicles, ready in {time.monotonic() - started:.1f} s"
+                )
+            )
             sys.stdout.flush()
             if settings.REDIS_URL:
                 self._run_production_topology(children, options)
@@ -63,18 +77,35 @@ class Command(BaseCommand):
         if not settings.MQTT_EMBEDDED:
             return
         address = BrokerAddress.from_url(settings.MQTT_URL)
-        children.python("broker", "-m", "fleet.broker", "--host", address.host,
-                        "--port", str(address.port))
+        children.python(
+            "broker", "-m", "fleet.broker", "--host", address.host, "--port", str(address.port)
+        )
         wait_for_port(address.host, address.port)
 
-    def _start_simulator(self, children: Children, layout: dict[str, Any],
-                         options: dict[str, Any]) -> None:
+    def _start_simulator(
+        self, children: Children, layout: dict[str, Any], options: dict[str, Any]
+    ) -> None:
         with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as handle:
             json.dump(layout, handle)
-        children.python("simulator", "-m", "simulator", "--count", str(options["vehicles"]),
-                        "--layout", handle.name, "--broker", settings.MQTT_URL,
-                        "--interface", settings.VDA5050_INTERFACE,
-                        "--time-scale", str(options["time_scale"]), "--visualization-hz", "5")
+        children.python(
+            "simulator",
+            "-m",
+            "simulator",
+            "--count",
+            str(options["vehicles"]),
+            "--layout",
+            handle.name,
+            "--broker",
+            settings.MQTT_URL,
+            "--interface",
+            settings.VDA5050_INTERFACE,
+            "--time-scale",
+            str(options["time_scale"]),
+            "--visualization-hz",
+            "5",
+            "--log-level",
+            "WARNING",
+        )
 
     def _run_in_process(self, options: dict[str, Any]) -> None:
         """Web server in the main thread, `control` in a thread of the same process."""
@@ -86,9 +117,13 @@ class Command(BaseCommand):
         control = build_control_loop()
         thread = threading.Thread(target=control.run, name="control", daemon=True)
         thread.start()
-        server = Server(application=application, signal_handlers=True,
-                        endpoints=build_endpoint_description_strings(host=options["host"],
-                                                                     port=options["port"]))
+        server = Server(
+            application=application,
+            signal_handlers=True,
+            endpoints=build_endpoint_description_strings(
+                host=options["host"], port=options["port"]
+            ),
+        )
         try:
             server.run()  # returns on SIGINT/SIGTERM
         finally:
@@ -97,13 +132,44 @@ class Command(BaseCommand):
 
     def _run_production_topology(self, children: Children, options: dict[str, Any]) -> None:
         """The Procfile's processes as children; returns when one dies or on SIGINT/SIGTERM."""
-        children.start("web", [sys.executable, "-m", "daphne", "-b", options["host"],
-                               "-p", str(options["port"]), "fleet.asgi:application"])
+        children.start(
+            "web",
+            [
+                sys.executable,
+                "-m",
+                "daphne",
+                "-b",
+                options["host"],
+                "-p",
+                str(options["port"]),
+                "fleet.asgi:application",
+            ],
+        )
         children.python("control", "manage.py", "run_control")
-        children.python("worker", "-m", "celery", "-A", "fleet", "worker", "--concurrency", "2",
-                        "--loglevel", "WARNING")
-        children.python("beat", "-m", "celery", "-A", "fleet", "beat", "--loglevel", "WARNING",
-                        "--schedule", f"{tempfile.gettempdir()}/fleet-celerybeat-schedule")
+        children.python(
+            "worker",
+            "-m",
+            "celery",
+            "-A",
+            "fleet",
+            "worker",
+            "--concurrency",
+            "2",
+            "--loglevel",
+            "WARNING",
+        )
+        children.python(
+            "beat",
+            "-m",
+            "celery",
+            "-A",
+            "fleet",
+            "beat",
+            "--loglevel",
+            "WARNING",
+            "--schedule",
+            f"{tempfile.gettempdir()}/fleet-celerybeat-schedule",
+        )
         stop = threading.Event()
         for sig in (signal.SIGTERM, signal.SIGINT):
             signal.signal(sig, lambda *_: stop.set())

@@ -19,9 +19,12 @@ class Command(BaseCommand):
 
     def handle(self, *args: Any, **options: Any) -> None:
         layout = create_layout(
-            spec=warehouse_layout(columns=options["columns"], rows=options["rows"],
-                                  map_id=options["map_id"]),
+            spec=warehouse_layout(
+                columns=options["columns"], rows=options["rows"], map_id=options["map_id"]
+            ),
             replace=options["replace"],
         )
-        self.stdout.write(f"created map {layout.map_id}: {layout.nodes.count()} nodes, "
-                          f"{layout.edges.count()} edges, {layout.stations.count()} stations")
+        self.stdout.write(
+            f"created map {layout.map_id}: {layout.nodes.count()} nodes, "
+            f"{layout.edges.count()} edges, {layout.stations.count()} stations"
+        )
