@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint format venv browser clean
+.PHONY: demo test lint format venv browser clean bench-ingest
 
 $(STAMP): requirements.txt requirements-dev.txt
 	@command -v $(PYTHON) >/dev/null || { echo "Python 3.11 is required ($(PYTHON) not found)"; exit 1; }
@@ -35,6 +35,9 @@ lint: $(STAMP)
 	$(VENV)/bin/lint-imports
 	$(VENV)/bin/mypy .
 	$(PY) manage.py makemigrations --check --dry-run
+
+bench-ingest: $(STAMP)  ## control's in-process cost per state message (bench/results/ingest.json)
+	$(PY) -m bench.ingest $(BENCH_ARGS)
 
 format: $(STAMP)
 	$(VENV)/bin/ruff format .

@@ -126,7 +126,6 @@ FLEET_CONTROL = {
     "FLUSH_INTERVAL": env.float("FLEET_FLUSH_INTERVAL", default=1.0),
     "BROADCAST_INTERVAL": env.float("FLEET_BROADCAST_INTERVAL", default=0.2),
     "SYNC_INTERVAL": env.float("FLEET_SYNC_INTERVAL", default=1.0),
-    "STATE_TIMEOUT": env.float("FLEET_STATE_TIMEOUT", default=30.0),
 }
 
 AUTH_PASSWORD_VALIDATORS = [
