@@ -72,4 +72,6 @@ def _status(vehicle: Vehicle) -> str:
         return "paused"
     if vehicle.charging:
         return "charging"
-    return "driving" if vehicle.driving else ("busy" if vehicle.order_id else "idle")
+    # The stored order id stays after an order ends, so it cannot tell busy from idle; the
+    # live updates from control can.
+    return "driving" if vehicle.driving else "idle"
