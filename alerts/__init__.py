@@ -1,1 +1,4 @@
-"""Alerts: alert records from VDA 5050 errors, timeouts, battery and maintenance; acknowledge and resolve (issue 8)."""
+"""Alerts: alert records from VDA 5050 errors, timeouts, battery and maintenance (issue 8).
+
+Acknowledge, resolve and escalate.
+"""

@@ -97,7 +97,13 @@ if REDIS_URL:
     CHANNEL_LAYERS = {
         "default": {
             "BACKEND": "channels_redis.core.RedisChannelLayer",
-            "CONFIG": {"hosts": [REDIS_URL], "capacity": 1000, "expiry": 10},
+            # channels_redis waits 5 s per receive; redis-py 8 would time the read out at 5 s
+            # and drop idle websockets (django/channels_redis#422), so no socket timeout.
+            "CONFIG": {
+                "hosts": [{"address": REDIS_URL, "socket_timeout": None}],
+                "capacity": 1000,
+                "expiry": 10,
+            },
         }
     }
 else:

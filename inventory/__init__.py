@@ -1,1 +1,4 @@
-"""Inventory: load carriers, storage locations and what is where, fed by pick/drop and state.loads (issue 8)."""
+"""Inventory: load carriers, storage locations and what is where (issue 8).
+
+Fed by finished pick/drop actions and the vehicles' state.loads.
+"""
