@@ -35,6 +35,14 @@ async def serve(host: str, port: int) -> None:
     await broker.shutdown()
 
 
+class _PortProbeFilter(logging.Filter):
+    """Hide the error amqtt logs when a readiness probe opens and closes a TCP connection."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        message = record.getMessage()
+        return "No data to decode MQTT packet fixed header" not in message
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--host", default="127.0.0.1")
