@@ -39,8 +39,7 @@ class _PortProbeFilter(logging.Filter):
     """Hide the error amqtt logs when a readiness probe opens and closes a TCP connection."""
 
     def filter(self, record: logging.LogRecord) -> bool:
-        message = record.getMessage()
-        return "No data to decode MQTT packet fixed header" not in message
+        return "No data to decode MQTT packet fixed header" not in record.getMessage()
 
 
 def main() -> None:
@@ -51,6 +50,8 @@ def main() -> None:
     logging.basicConfig(
         level=logging.WARNING, format="%(asctime)s broker %(levelname)s %(message)s"
     )
+    for handler in logging.getLogger().handlers:
+        handler.addFilter(_PortProbeFilter())
     asyncio.run(serve(args.host, args.port))
 
 
