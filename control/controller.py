@@ -96,7 +96,8 @@ class Controller:
                 vehicle = self.fleet.get_or_add(
                     row["manufacturer"], row["serial_number"], row["interface_name"]
                 )
-                vehicle.pk, vehicle.version = row["pk"], row["protocol_version"]
+                self.fleet.set_pk(vehicle, row["pk"])
+                vehicle.version = row["protocol_version"]
                 vehicle.needs_flush = False
 
     # Inbound: one handler per topic kind -------------------------------------------------------
@@ -225,7 +226,7 @@ class Controller:
         if state.last_node_id != order.route[0]:
             self._end(
                 Progress(
-                    "failed",
+                    "requeued",
                     order.transport_order_id,
                     {
                         "reason": f"vehicle is at {state.last_node_id}, "
@@ -340,7 +341,7 @@ class Controller:
             return
         with self.lock:
             for vehicle in batch.new_vehicles:
-                vehicle.pk = registered.get(vehicle.key)
+                self.fleet.set_pk(vehicle, registered.get(vehicle.key))
                 vehicle.needs_flush = True  # its snapshot goes with the next flush
         if batch.newly_available or batch.new_vehicles:
             self.store.request_dispatch()

@@ -45,7 +45,7 @@ class Phase(enum.StrEnum):
 class Progress:
     """Something that happened to a transport order, to be persisted by the flusher."""
 
-    kind: str  # started | step | finished | failed | cancelled
+    kind: str  # started | step | finished | failed | cancelled | requeued
     order_id: int
     detail: dict[str, str] = field(default_factory=dict)
 

@@ -100,6 +100,7 @@ class Fleet:
     """All live vehicles, by identity."""
 
     vehicles: dict[VehicleKey, LiveVehicle] = field(default_factory=dict)
+    _by_pk: dict[int, LiveVehicle] = field(default_factory=dict)
 
     def get_or_add(self, manufacturer: str, serial_number: str, interface_name: str) -> LiveVehicle:
         key = (manufacturer, serial_number)
@@ -110,4 +111,10 @@ class Fleet:
         return vehicle
 
     def by_pk(self, pk: int) -> LiveVehicle | None:
-        return next((v for v in self.vehicles.values() if v.pk == pk), None)
+        return self._by_pk.get(pk)
+
+    def set_pk(self, vehicle: LiveVehicle, pk: int | None) -> None:
+        """Record the registry id of `vehicle` (known after the flusher registered it)."""
+        vehicle.pk = pk
+        if pk is not None:
+            self._by_pk[pk] = vehicle

@@ -96,5 +96,7 @@ def _apply(progress: Progress) -> None:
         order_services.mark_order_finished(order_id=order_id)
     elif progress.kind == "failed":
         order_services.mark_order_failed(order_id=order_id, reason=detail.get("reason", ""))
+    elif progress.kind == "requeued":
+        order_services.requeue_order(order_id=order_id, reason=detail.get("reason", ""))
     elif progress.kind == "cancelled":
         order_services.mark_order_cancelled(order_id=order_id)

@@ -86,6 +86,7 @@ class OrderEvent(models.Model):
         STEP_REACHED = "STEP_REACHED", "step reached"
         FINISHED = "FINISHED", "finished"
         FAILED = "FAILED", "failed"
+        REQUEUED = "REQUEUED", "requeued"
         CANCEL_REQUESTED = "CANCEL_REQUESTED", "cancel requested"
         CANCELLED = "CANCELLED", "cancelled"
 

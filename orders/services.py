@@ -163,6 +163,17 @@ def mark_order_failed(*, order_id: int, reason: str) -> None:
 
 
 @transaction.atomic
+def requeue_order(*, order_id: int, reason: str) -> None:
+    """Give an assigned order back to dispatch: the vehicle could not start it as planned
+    (it is no longer where the route begins). Orders already started are never requeued."""
+    if _transition(
+        order_id, {Status.ASSIGNED}, Status.NEW, vehicle=None, route=[], assigned_at=None
+    ):
+        _record_id(order_id, OrderEvent.Kind.REQUEUED, reason=reason)
+        _on_commit_dispatch()
+
+
+@transaction.atomic
 def mark_order_cancelled(*, order_id: int) -> None:
     """The vehicle stopped after a cancel request (control confirmed cancelOrder finished)."""
     if _transition(

@@ -213,3 +213,15 @@ def test_an_order_finished_in_memory_is_not_adopted_again_before_the_flush(contr
         "step",
         "finished",
     ]
+
+
+def test_an_order_whose_route_starts_elsewhere_goes_back_to_dispatch(controller, sent) -> None:
+    controller.handle_message(STATE_TOPIC, state(last_node="c"))
+
+    controller.sync([order()])
+    controller.flush()
+
+    assert sent == []
+    requeued = controller.store.batches[-1].progress[-1]
+    assert requeued.kind == "requeued"
+    assert "route starts at a" in requeued.detail["reason"]

@@ -142,3 +142,19 @@ def test_cancel_of_an_assigned_order_asks_control(
     assert order.status == TransportOrder.Status.ASSIGNED
     assert order.cancel_requested
     assert sent == [("order.cancel", {"order": order.pk})]
+
+
+def test_requeue_returns_an_assigned_order_to_dispatch(demo_map) -> None:
+    order = TransportOrder.objects.create(
+        source=station(demo_map, "PICK-1"),
+        destination=station(demo_map, "DROP-1"),
+        vehicle=VehicleFactory(),
+        route=["A0.0"],
+        status=TransportOrder.Status.ASSIGNED,
+    )
+
+    services.requeue_order(order_id=order.pk, reason="vehicle moved")
+
+    order.refresh_from_db()
+    assert (order.status, order.vehicle, order.route) == ("NEW", None, [])
+    assert order.events.get().kind == OrderEvent.Kind.REQUEUED
