@@ -21,7 +21,7 @@ from control.execution import LayoutIndex, OrderExecution, Phase, Progress, buil
 from control.live import Fleet, LiveVehicle
 from vda5050 import DecodeError, decode, encode
 from vda5050.enums import TopicKind
-from vda5050.headers import HeaderCounter, now_timestamp
+from vda5050.headers import HeaderCounter, HeaderFields
 from vda5050.topics import Topic, TopicError
 
 logger = logging.getLogger(__name__)
@@ -284,14 +284,10 @@ class Controller:
         self._send(vehicle, TopicKind.INSTANT_ACTIONS, message)
         return action.action_id
 
-    def _header(self, vehicle: LiveVehicle, kind: TopicKind) -> dict[str, Any]:
-        return {
-            "header_id": self.headers.next_id(vehicle.manufacturer, vehicle.serial_number, kind),
-            "timestamp": now_timestamp(vehicle.version),
-            "version": vehicle.version,
-            "manufacturer": vehicle.manufacturer,
-            "serial_number": vehicle.serial_number,
-        }
+    def _header(self, vehicle: LiveVehicle, kind: TopicKind) -> HeaderFields:
+        return self.headers.header(
+            vehicle.manufacturer, vehicle.serial_number, kind, vehicle.version
+        )
 
     def _send(self, vehicle: LiveVehicle, kind: TopicKind, message: Any) -> None:
         topic = Topic(

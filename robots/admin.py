@@ -3,6 +3,7 @@
 from django.contrib import admin
 
 from robots.models import Vehicle
+from robots.services import SNAPSHOT_FIELDS
 
 
 @admin.register(Vehicle)
@@ -20,26 +21,4 @@ class VehicleAdmin(admin.ModelAdmin[Vehicle]):
     ]
     list_filter = ["connection", "manufacturer", "protocol_version", "operating_mode"]
     search_fields = ["serial_number", "name", "manufacturer"]
-    readonly_fields = [
-        "connection",
-        "factsheet",
-        "map_id",
-        "x",
-        "y",
-        "theta",
-        "position_initialized",
-        "battery_charge",
-        "charging",
-        "driving",
-        "paused",
-        "operating_mode",
-        "errors",
-        "loads",
-        "order_id",
-        "order_update_id",
-        "last_node_id",
-        "last_node_sequence_id",
-        "last_seen",
-        "created_at",
-        "updated_at",
-    ]
+    readonly_fields = [*SNAPSHOT_FIELDS, "factsheet", "created_at", "updated_at"]

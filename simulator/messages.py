@@ -22,7 +22,6 @@ from vda5050 import (
     State,
     Velocity,
     Visualization,
-    now_timestamp,
 )
 from vda5050.enums import (
     ConnectionState,
@@ -32,16 +31,16 @@ from vda5050.enums import (
     OperatingMode,
     TopicKind,
 )
+from vda5050.headers import HeaderFields
 
 if TYPE_CHECKING:
     from simulator.vehicle import VirtualVehicle
 
 
-def _stamp(vehicle: VirtualVehicle, kind: TopicKind) -> tuple[int, str]:
-    """Next headerId of topic ``kind`` and the current timestamp in the version's format."""
+def _header(vehicle: VirtualVehicle, kind: TopicKind) -> HeaderFields:
+    """Header of the next message on topic ``kind`` (next headerId, timestamp per version)."""
     cfg = vehicle.config
-    header_id = vehicle.headers.next_id(cfg.manufacturer, cfg.serial_number, kind)
-    return header_id, now_timestamp(cfg.version)
+    return vehicle.headers.header(cfg.manufacturer, cfg.serial_number, kind, cfg.version)
 
 
 def is_v21(version: str) -> bool:
@@ -84,18 +83,13 @@ def _errors(vehicle: VirtualVehicle) -> list[Error]:
 def state_message(vehicle: VirtualVehicle) -> State:
     """Assemble the state message of ``vehicle``."""
     cfg = vehicle.config
-    header_id, timestamp = _stamp(vehicle, TopicKind.STATE)
     pending = vehicle.pending
     # Standing at the end of the base with a horizon left: ask master control to extend.
     waiting_for_base = (
         bool(pending) and not pending[0].released and not vehicle.driving and not vehicle.cancelled
     )
     return State(
-        header_id=header_id,
-        timestamp=timestamp,
-        version=cfg.version,
-        manufacturer=cfg.manufacturer,
-        serial_number=cfg.serial_number,
+        **_header(vehicle, TopicKind.STATE),
         maps=(
             [
                 MapState(map_id=m, map_version=cfg.map_version, map_status=MapStatus.ENABLED)
@@ -162,14 +156,8 @@ def state_message(vehicle: VirtualVehicle) -> State:
 
 def visualization_message(vehicle: VirtualVehicle) -> Visualization:
     """Assemble a visualization message (pose and velocity only)."""
-    cfg = vehicle.config
-    header_id, timestamp = _stamp(vehicle, TopicKind.VISUALIZATION)
     return Visualization(
-        header_id=header_id,
-        timestamp=timestamp,
-        version=cfg.version,
-        manufacturer=cfg.manufacturer,
-        serial_number=cfg.serial_number,
+        **_header(vehicle, TopicKind.VISUALIZATION),
         agv_position=agv_position(vehicle),
         velocity=velocity(vehicle),
     )
@@ -177,14 +165,8 @@ def visualization_message(vehicle: VirtualVehicle) -> Visualization:
 
 def connection_message(vehicle: VirtualVehicle, state: ConnectionState) -> Connection:
     """Assemble a connection message with ``state``."""
-    cfg = vehicle.config
-    header_id, timestamp = _stamp(vehicle, TopicKind.CONNECTION)
     return Connection(
-        header_id=header_id,
-        timestamp=timestamp,
-        version=cfg.version,
-        manufacturer=cfg.manufacturer,
-        serial_number=cfg.serial_number,
+        **_header(vehicle, TopicKind.CONNECTION),
         connection_state=state,
     )
 
@@ -192,13 +174,8 @@ def connection_message(vehicle: VirtualVehicle, state: ConnectionState) -> Conne
 def factsheet_message(vehicle: VirtualVehicle) -> Factsheet:
     """Assemble the factsheet describing what the simulated vehicle supports."""
     cfg = vehicle.config
-    header_id, timestamp = _stamp(vehicle, TopicKind.FACTSHEET)
     return build_factsheet(
-        header_id=header_id,
-        timestamp=timestamp,
-        version=cfg.version,
-        manufacturer=cfg.manufacturer,
-        serial_number=cfg.serial_number,
+        **_header(vehicle, TopicKind.FACTSHEET),
         speed_max=cfg.speed,
         state_interval=cfg.state_interval,
         visualization_hz=cfg.visualization_hz,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 import threading
 from datetime import UTC, datetime
+from typing import TypedDict
 
 from vda5050.enums import TopicKind
 from vda5050.errors import TimestampError
@@ -14,6 +15,7 @@ from vda5050.versions import major_of
 __all__ = [
     "HEADER_ID_MODULUS",
     "HeaderCounter",
+    "HeaderFields",
     "format_timestamp",
     "now_timestamp",
     "parse_timestamp",
@@ -23,6 +25,16 @@ __all__ = [
 HEADER_ID_MODULUS = 2**32
 
 _Key = tuple[str, str, TopicKind]
+
+
+class HeaderFields(TypedDict):
+    """Header keywords shared by every message Struct (``**fields`` into the constructor)."""
+
+    header_id: int
+    timestamp: str
+    version: str
+    manufacturer: str
+    serial_number: str
 
 
 class HeaderCounter:
@@ -50,6 +62,18 @@ class HeaderCounter:
             value = self._next.get(key, 0)
             self._next[key] = (value + 1) % HEADER_ID_MODULUS
             return value
+
+    def header(
+        self, manufacturer: str, serial_number: str, kind: TopicKind | str, version: str
+    ) -> HeaderFields:
+        """The five header fields of the next message on this topic, as Struct keywords."""
+        return HeaderFields(
+            header_id=self.next_id(manufacturer, serial_number, kind),
+            timestamp=now_timestamp(version),
+            version=version,
+            manufacturer=manufacturer,
+            serial_number=serial_number,
+        )
 
     def peek(self, manufacturer: str, serial_number: str, kind: TopicKind | str) -> int:
         """Return the headerId :meth:`next_id` would hand out, without advancing."""
