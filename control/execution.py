@@ -87,15 +87,17 @@ class OrderExecution:
         """Progress events that `state` reveals (acceptance, actions done, completion, failure)."""
         if self.phase is Phase.DONE:
             return []
+        statuses = {a.action_id: str(a.action_status) for a in state.action_states}
+        if self.phase is Phase.CANCELLING:
+            # Also when the vehicle never took the order: its cancelOrder then fails with
+            # noOrderToCancel, which ends the cancellation just as well.
+            return self._cancel_progress(statuses)
         if state.order_id != self.vda_order_id:
             return self._rejection(state)
         events: list[Progress] = []
         if self.phase is Phase.SENT:
             self.phase = Phase.RUNNING
             events.append(Progress("started", self.transport_order_id))
-        statuses = {a.action_id: str(a.action_status) for a in state.action_states}
-        if self.phase is Phase.CANCELLING:
-            return events + self._cancel_progress(statuses)
         for action_id, step in self.action_steps.items():
             status = statuses.get(action_id)
             if status == "FAILED":

@@ -225,3 +225,25 @@ def test_an_order_whose_route_starts_elsewhere_goes_back_to_dispatch(controller,
     requeued = controller.store.batches[-1].progress[-1]
     assert requeued.kind == "requeued"
     assert "route starts at a" in requeued.detail["reason"]
+
+
+def test_cancel_before_the_vehicle_took_the_order_ends_on_no_order_to_cancel(
+    controller, sent
+) -> None:
+    controller.handle_message(STATE_TOPIC, state())
+    controller.sync([order()])
+
+    controller.sync([order(cancel_requested=True)])
+    cancel = sent[-1][1]["actions"][0]
+    controller.handle_message(
+        STATE_TOPIC,
+        state(
+            header_id=2,
+            actions=((cancel["actionId"], "FAILED"),),
+            errors=(("noOrderToCancel", "WARNING", "x"),),
+        ),
+    )
+    controller.flush()
+
+    assert [p.kind for p in controller.store.batches[-1].progress] == ["cancelled"]
+    assert controller.fleet.by_pk(1).execution is None
