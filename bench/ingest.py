@@ -12,8 +12,9 @@ from typing import Any
 
 import vda5050
 from bench import results
-from control.controller import ActiveOrder, Controller, FlushBatch
+from control.controller import Controller
 from control.execution import LayoutIndex, NodePlace
+from control.ports import ActiveOrder, FlushBatch
 
 NODES = [f"n{i}" for i in range(20)]
 LAYOUT = LayoutIndex(

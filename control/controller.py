@@ -9,62 +9,31 @@ throttled broadcasts. One lock keeps the model consistent between the two thread
 import logging
 import threading
 import time
+import uuid
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from datetime import UTC, datetime
-from typing import Any, Protocol
+from typing import Any
 
 import vda5050
 from control import snapshots
+from control.capabilities import refuse_instant_action
 from control.execution import LayoutIndex, OrderExecution, Phase, Progress, build_order
-from control.live import Fleet, LiveVehicle
-from vda5050 import DecodeError, decode, encode
+from control.live import Fleet, InstantActionTrack, LiveVehicle
+from control.ports import ActiveOrder, FlushBatch, Store
+from control.publisher import Publish, Publisher
+from control.session import Verdict
+from vda5050 import DecodeError, decode
 from vda5050.enums import TopicKind
-from vda5050.headers import HeaderCounter, HeaderFields
 from vda5050.topics import Topic, TopicError
 
 logger = logging.getLogger(__name__)
 
-Publish = Callable[[str, bytes, int], None]
 
-
-@dataclass(frozen=True)
-class ActiveOrder:
-    """An assigned transport order as `control` needs it (read from the database by the store)."""
-
-    transport_order_id: int
-    vda_order_id: str
-    vehicle_pk: int
-    route: list[str]
-    pickup_node: str
-    map_id: str
-    pick_station: str
-    drop_station: str
-    load_id: str = ""
-    load_type: str = "EPAL"
-    cancel_requested: bool = False
-
-
-@dataclass
-class FlushBatch:
-    """What the flusher writes in one go."""
-
-    new_vehicles: list[LiveVehicle] = field(default_factory=list)
-    snapshots: list[dict[str, Any]] = field(default_factory=list)
-    factsheets: dict[int, dict[str, Any]] = field(default_factory=dict)
-    progress: list[Progress] = field(default_factory=list)
-    newly_available: int = 0
-
-
-class Store(Protocol):
-    """The database side of `control` (see control.persistence.DjangoStore)."""
-
-    def load_layouts(self) -> dict[str, LayoutIndex]: ...
-    def load_vehicles(self) -> list[dict[str, Any]]: ...
-    def active_orders(self) -> list[ActiveOrder]: ...
-    def flush(self, batch: FlushBatch) -> dict[tuple[str, str], int]: ...
-    def request_dispatch(self) -> None: ...
+_VEHICLE_COMMANDS: dict[str, tuple[str, dict[str, Any]]] = {
+    "vehicle.pause": ("startPause", {}),
+    "vehicle.resume": ("stopPause", {}),
+}
 
 
 class Controller:
@@ -77,11 +46,10 @@ class Controller:
     ) -> None:
         self.store = store
         self.interface_name = interface_name
-        self.publish: Publish = publish or (lambda topic, payload, qos: None)
         self.fleet = Fleet()
         self.layouts: dict[str, LayoutIndex] = {}
-        self.headers = HeaderCounter()
         self.counters: Counter[str] = Counter()
+        self.publisher = Publisher(publish, self.counters)
         self.lock = threading.RLock()
         self._progress: list[Progress] = []
         # Orders that ended in memory; the database may list them as active until the next
@@ -103,7 +71,12 @@ class Controller:
     # Inbound: one handler per topic kind -------------------------------------------------------
 
     def handle_message(self, topic_text: str, payload: bytes) -> None:
-        """Decode one MQTT message at the edge and apply it; bad input is logged and counted."""
+        """Decode one MQTT message at the edge and apply it; bad input is logged and counted.
+
+        Dropped: bad topics, undecodable payloads, payloads whose identity differs from their
+        topic, and (except `connection`, whose last-will header is stale by design) duplicate
+        or older header ids of the same connection.
+        """
         self.counters["messages"] += 1
         try:
             topic = Topic.parse(topic_text)
@@ -116,15 +89,30 @@ class Controller:
         if handler is None:
             return  # our own order/instantActions echoes
         with self.lock:
-            vehicle = self.fleet.get_or_add(
+            # Only a valid message registers a vehicle: garbage on made-up serial numbers
+            # must not fill the registry.
+            known = self.fleet.vehicles.get((topic.manufacturer, topic.serial_number))
+            try:
+                message = decode(topic.kind, payload, version=known.version if known else "2.0.0")
+            except DecodeError as exc:
+                self._reject("decode_errors", topic_text, exc, known)
+                return
+            if (message.manufacturer, message.serial_number) != (
+                topic.manufacturer,
+                topic.serial_number,
+            ):
+                reason = f"payload is from {message.manufacturer}/{message.serial_number}"
+                self._reject("identity_mismatch", topic_text, ValueError(reason), known)
+                return
+            vehicle = known or self.fleet.get_or_add(
                 topic.manufacturer, topic.serial_number, topic.interface_name
             )
-            try:
-                message = decode(topic.kind, payload, version=vehicle.version)
-            except DecodeError as exc:
-                vehicle.decode_errors += 1
-                self._reject("decode_errors", topic_text, exc)
-                return
+            if topic.kind != TopicKind.CONNECTION and message.header_id is not None:
+                verdict = vehicle.session.check_header(topic.kind, message.header_id)
+                if verdict is not Verdict.APPLY:
+                    self.counters[verdict.value] += 1
+                    vehicle.needs_flush = True  # the counters are shown
+                    return
             try:
                 handler(self, vehicle, message)
             except Exception:  # one bad robot never stops the fleet
@@ -132,7 +120,8 @@ class Controller:
                 logger.exception("handler failed for %s", topic_text)
 
     def on_state(self, vehicle: LiveVehicle, state: vda5050.State) -> None:
-        vehicle.apply_state(state, received_at=datetime.now(UTC))
+        if vehicle.apply_state(state, received_at=datetime.now(UTC)):
+            self._reconcile(vehicle, reconnected=False)
         execution = vehicle.execution
         if execution is None:
             return
@@ -148,7 +137,8 @@ class Controller:
             vehicle.execution = None
 
     def on_connection(self, vehicle: LiveVehicle, message: vda5050.Connection) -> None:
-        vehicle.apply_connection(message, received_at=datetime.now(UTC))
+        if vehicle.apply_connection(message, received_at=datetime.now(UTC)):
+            self._reconcile(vehicle, reconnected=True)
 
     def on_factsheet(self, vehicle: LiveVehicle, message: vda5050.Factsheet) -> None:
         vehicle.apply_factsheet(message)
@@ -158,6 +148,15 @@ class Controller:
             vehicle.visual_position = message.agv_position
             vehicle.needs_broadcast = True
 
+    def _reconcile(self, vehicle: LiveVehicle, *, reconnected: bool) -> None:
+        """After a (re)connection ask for the current state and factsheet (REFERENCE H.38, J);
+        after a first or late state only fetch a factsheet we do not have yet."""
+        if reconnected:
+            self.publisher.instant_action(vehicle, "stateRequest")
+        if reconnected or (vehicle.factsheet is None and not vehicle.factsheet_requested):
+            self.publisher.instant_action(vehicle, "factsheetRequest")
+            vehicle.factsheet_requested = True
+
     _handlers: dict[str, Callable[["Controller", LiveVehicle, Any], None]] = {
         TopicKind.STATE: on_state,
         TopicKind.CONNECTION: on_connection,
@@ -165,8 +164,13 @@ class Controller:
         TopicKind.VISUALIZATION: on_visualization,
     }
 
-    def _reject(self, counter: str, topic_text: str, exc: Exception) -> None:
+    def _reject(
+        self, counter: str, topic_text: str, exc: Exception, vehicle: LiveVehicle | None = None
+    ) -> None:
         self.counters[counter] += 1
+        if vehicle is not None:
+            vehicle.session.counters[counter] += 1
+            vehicle.needs_flush = True
         if self.counters[counter] <= 20 or self.counters[counter] % 1000 == 0:
             logger.warning(
                 "dropped message on %s (%s #%d): %s",
@@ -254,51 +258,60 @@ class Controller:
             pick_station=order.pick_station,
             drop_station=order.drop_station,
         )
-        message = vda5050.Order(
-            **self._header(vehicle, TopicKind.ORDER),
-            order_id=execution.vda_order_id,
-            order_update_id=0,
-            nodes=nodes,
-            edges=edges,
+        self.publisher.order(
+            vehicle, order_id=execution.vda_order_id, order_update_id=0, nodes=nodes, edges=edges
         )
-        self._send(vehicle, TopicKind.ORDER, message)
         execution.sent_monotonic = time.monotonic()
 
     def _send_cancel(self, vehicle: LiveVehicle, execution: OrderExecution) -> None:
         action_id = execution.start_cancel()
-        self.send_instant_action(vehicle, "cancelOrder", action_id=action_id)
+        self.publisher.instant_action(vehicle, "cancelOrder", action_id=action_id)
 
-    def send_instant_action(
+    def execute(self, command: dict[str, Any]) -> None:
+        """Carry out a command from web or Celery (fleet.control_queue).
+
+        Order commands only wake the loop (the database says what to do, read by `sync`);
+        vehicle commands become instant actions, checked against the vehicle's mode and
+        factsheet first and tracked to their end.
+        """
+        kind = command.get("kind", "")
+        if kind.startswith("order."):
+            return
+        action_type, parameters = _VEHICLE_COMMANDS.get(kind, (None, {}))
+        if kind == "vehicle.instant_action":
+            action_type, parameters = command.get("action_type"), command.get("parameters") or {}
+        with self.lock:
+            vehicle = self.fleet.by_pk(command.get("vehicle", -1))
+            if vehicle is None or not isinstance(action_type, str):
+                self.counters["bad_commands"] += 1
+                logger.warning("ignored command %r: unknown vehicle or kind", command)
+                return
+            self.request_instant_action(
+                vehicle, action_type, parameters, request=command.get("request")
+            )
+
+    def request_instant_action(
         self,
         vehicle: LiveVehicle,
         action_type: str,
+        parameters: dict[str, Any],
         *,
-        action_id: str | None = None,
-        parameters: dict[str, Any] | None = None,
-    ) -> str:
-        """Publish one instant action to `vehicle`; returns its actionId."""
-        action = vda5050.make_action(action_type, parameters, action_id=action_id)
-        message = vda5050.InstantActions(
-            **self._header(vehicle, TopicKind.INSTANT_ACTIONS), actions=[action]
-        )
-        self._send(vehicle, TopicKind.INSTANT_ACTIONS, message)
-        return action.action_id
-
-    def _header(self, vehicle: LiveVehicle, kind: TopicKind) -> HeaderFields:
-        return self.headers.header(
-            vehicle.manufacturer, vehicle.serial_number, kind, vehicle.version
-        )
-
-    def _send(self, vehicle: LiveVehicle, kind: TopicKind, message: Any) -> None:
-        topic = Topic(
-            interface_name=vehicle.interface_name,
-            major_version=vda5050.major_version_of(vehicle.version),
-            manufacturer=vehicle.manufacturer,
-            serial_number=vehicle.serial_number,
-            kind=kind,
-        )
-        self.publish(str(topic), encode(message), 0)
-        self.counters[f"sent_{kind}"] += 1
+        request: str | None = None,
+    ) -> InstantActionTrack:
+        """Send an operator's instant action if the vehicle may take it, and track it."""
+        state = vehicle.state
+        mode = str(state.operating_mode) if state is not None else None
+        reason = refuse_instant_action(vehicle.capabilities, mode, action_type, parameters)
+        if reason is None:
+            action_id = self.publisher.instant_action(vehicle, action_type, parameters=parameters)
+            track = InstantActionTrack(action_id, action_type, "SENT", request=request)
+        else:
+            self.counters["refused_actions"] += 1
+            track = InstantActionTrack(
+                f"refused-{uuid.uuid4()}", action_type, "REFUSED", reason=reason, request=request
+            )
+        vehicle.track(track)
+        return track
 
     # Periodic: flush and broadcast --------------------------------------------------------------
 
@@ -307,7 +320,12 @@ class Controller:
         batch = FlushBatch()
         with self.lock:
             batch.progress, self._progress = self._progress, []
+            now = time.monotonic()
             for vehicle in self.fleet.vehicles.values():
+                link = vehicle.session.link(now)
+                if link is not vehicle.last_link:  # e.g. ONLINE -> UNREACHABLE on timeout
+                    vehicle.last_link = link
+                    vehicle.mark_changed()
                 available = vehicle.is_available and vehicle.is_idle
                 if available and not vehicle.was_available:
                     batch.newly_available += 1

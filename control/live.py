@@ -12,8 +12,23 @@ from typing import Any
 import msgspec
 
 import vda5050
+from control.capabilities import Capabilities
 from control.execution import OrderExecution
-from vda5050.enums import ConnectionState
+from control.session import Link, ProtocolSession
+
+TRACKED_INSTANT_ACTIONS = 20  # the latest instant actions kept per vehicle for display
+
+
+@dataclass
+class InstantActionTrack:
+    """An instant action we sent (or refused), followed to its end in the vehicle's state."""
+
+    action_id: str
+    action_type: str
+    status: str  # SENT, REFUSED, then the vehicle's actionStatus
+    reason: str = ""
+    request: str | None = None  # the caller's reference, if any
+
 
 VehicleKey = tuple[str, str]  # (manufacturer, serial number)
 
@@ -27,58 +42,84 @@ class LiveVehicle:
     interface_name: str
     version: str = "2.0.0"
     pk: int | None = None
-    connection: str = "UNKNOWN"
+    session: ProtocolSession = field(default_factory=ProtocolSession)
     state: vda5050.State | None = None
     factsheet: dict[str, Any] | None = None
     factsheet_changed: bool = False
+    factsheet_requested: bool = False
+    capabilities: Capabilities | None = None
+    instant_actions: dict[str, InstantActionTrack] = field(default_factory=dict)
     visual_position: vda5050.AgvPosition | None = None
     last_seen: datetime | None = None
-    last_state_monotonic: float = 0.0
     execution: OrderExecution | None = None
-    decode_errors: int = 0
     needs_flush: bool = True
     needs_broadcast: bool = True
     was_available: bool = False
+    last_link: Link = Link.UNKNOWN
 
     @property
     def key(self) -> VehicleKey:
         return (self.manufacturer, self.serial_number)
 
+    @property
+    def connection(self) -> str:
+        """The connection as dispatch should see it now (ONLINE only with recent states)."""
+        return self.session.link(time.monotonic()).value
+
     def mark_changed(self) -> None:
         self.needs_flush = True
         self.needs_broadcast = True
 
-    def apply_state(self, state: vda5050.State, *, received_at: datetime) -> None:
-        """Take a new state message as the vehicle's current state."""
+    def apply_state(self, state: vda5050.State, *, received_at: datetime) -> bool:
+        """Take a new state message; True if the vehicle was unknown or silent before."""
+        woke_up = self.session.on_state(time.monotonic(), _skew(state.timestamp, received_at))
         self.state = state
         self.version = state.version or self.version
         self.last_seen = received_at
-        self.last_state_monotonic = time.monotonic()
         if state.agv_position is not None:
             self.visual_position = state.agv_position
-        if self.connection in {"UNKNOWN", "OFFLINE", "CONNECTIONBROKEN"}:
-            # A vehicle that sends state is connected, whatever a stale retained message said.
-            self.connection = ConnectionState.ONLINE.value
+        self.follow_instant_actions(state)
         self.mark_changed()
+        return woke_up
 
-    def apply_connection(self, message: vda5050.Connection, *, received_at: datetime) -> None:
-        self.connection = str(message.connection_state)
+    def apply_connection(self, message: vda5050.Connection, *, received_at: datetime) -> bool:
+        """Take a connection message; True if the vehicle (re)connected."""
+        reconnected = self.session.on_connection(str(message.connection_state), time.monotonic())
         self.version = message.version or self.version
         self.last_seen = received_at
         self.mark_changed()
+        return reconnected
 
     def apply_factsheet(self, message: vda5050.Factsheet) -> None:
         self.factsheet = msgspec.to_builtins(message)
+        self.capabilities = Capabilities.from_factsheet(message)
         self.factsheet_changed = True
         self.version = message.version or self.version
+        interval = message.protocol_limits.timing.default_state_interval
+        if interval:
+            self.session.state_interval = interval
         self.needs_flush = True
+
+    def track(self, action: InstantActionTrack) -> None:
+        self.instant_actions[action.action_id] = action
+        while len(self.instant_actions) > TRACKED_INSTANT_ACTIONS:
+            del self.instant_actions[next(iter(self.instant_actions))]
+        self.needs_broadcast = True
+
+    def follow_instant_actions(self, state: vda5050.State) -> None:
+        """Update the tracked instant actions from the state's actionStates (2.x lists them)."""
+        for action_state in state.action_states:
+            tracked = self.instant_actions.get(action_state.action_id)
+            if tracked is not None and tracked.status != str(action_state.action_status):
+                tracked.status = str(action_state.action_status)
+                tracked.reason = action_state.result_description or ""
 
     @property
     def is_available(self) -> bool:
         """Connected, in an automatic mode, localised on a node and without fatal errors."""
         state = self.state
         return (
-            self.connection == ConnectionState.ONLINE.value
+            self.connection == Link.ONLINE
             and state is not None
             and str(state.operating_mode) in {"AUTOMATIC", "SEMIAUTOMATIC"}
             and not state.paused
@@ -118,3 +159,11 @@ class Fleet:
         vehicle.pk = pk
         if pk is not None:
             self._by_pk[pk] = vehicle
+
+
+def _skew(timestamp: str, received_at: datetime) -> float | None:
+    """Seconds our clock is ahead of the vehicle's (display only, never used for ordering)."""
+    try:
+        return (received_at - vda5050.parse_timestamp(timestamp)).total_seconds()
+    except vda5050.TimestampError:
+        return None

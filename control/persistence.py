@@ -5,8 +5,8 @@ from typing import Any
 
 from django.db import close_old_connections, transaction
 
-from control.controller import ActiveOrder, FlushBatch
 from control.execution import LayoutIndex, NodePlace, Progress
+from control.ports import ActiveOrder, FlushBatch
 from maps.models import Edge, Map, Node
 from orders import selectors as order_selectors
 from orders import services as order_services

@@ -8,7 +8,8 @@ from typing import Any
 
 import paho.mqtt.client as mqtt
 
-from control.controller import ActiveOrder, Controller
+from control.controller import Controller
+from control.ports import ActiveOrder
 from vda5050.enums import TopicKind
 
 logger = logging.getLogger(__name__)
@@ -31,7 +32,7 @@ class MqttLink:
         client.on_connect = self._on_connect
         client.on_disconnect = self._on_disconnect
         client.on_message = self._on_message
-        controller.publish = self.publish
+        controller.publisher.publish = self.publish
 
     def start(self) -> None:
         self.client.connect_async(self.host, self.port, keepalive=15)
@@ -96,6 +97,8 @@ class ControlLoop:
         try:
             while not self._stop.is_set():
                 commands = self._safely(self.receive_commands, 0.05) or []
+                for command in commands:
+                    self._safely(self.controller.execute, command)
                 now = time.monotonic()
                 if commands or now >= due["SYNC_INTERVAL"]:
                     self._safely(self._sync)

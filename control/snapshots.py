@@ -7,19 +7,18 @@ import msgspec
 from control.execution import LayoutIndex
 from control.live import LiveVehicle
 
-# 3.0 spells some states with an underscore; the registry stores the 2.x spelling.
-_CONNECTION_NAMES = {"CONNECTION_BROKEN": "CONNECTIONBROKEN", "HIBERNATING": "ONLINE"}
-
 
 def row(vehicle: LiveVehicle) -> dict[str, Any]:
     """The `robots.Vehicle` snapshot fields (robots.services.SNAPSHOT_FIELDS) plus `pk`."""
     state, position = vehicle.state, vehicle.visual_position
     data: dict[str, Any] = {
         "pk": vehicle.pk,
-        "connection": _CONNECTION_NAMES.get(vehicle.connection, vehicle.connection),
+        "connection": vehicle.connection,
         "protocol_version": vehicle.version,
         "interface_name": vehicle.interface_name,
         "last_seen": vehicle.last_seen,
+        "clock_skew": vehicle.session.clock_skew,
+        "protocol_counters": dict(vehicle.session.counters),
         "map_id": position.map_id if position else "",
         "x": position.x if position else None,
         "y": position.y if position else None,
@@ -101,4 +100,9 @@ def browser_row(vehicle: LiveVehicle, layouts: dict[str, LayoutIndex]) -> dict[s
         "errors": [f"{e.error_level} {e.error_type}" for e in state.errors] if state else [],
         "base": base,
         "horizon": horizon,
+        "clock_skew": vehicle.session.clock_skew,
+        "instant_actions": [
+            {"type": a.action_type, "status": a.status, "reason": a.reason}
+            for a in list(vehicle.instant_actions.values())[-5:]
+        ],
     }

@@ -14,6 +14,8 @@ class Vehicle(models.Model):
     class Connection(models.TextChoices):
         UNKNOWN = "UNKNOWN", "unknown"
         ONLINE = "ONLINE", "online"
+        # Says ONLINE (or said nothing) but sent no state within its state interval.
+        UNREACHABLE = "UNREACHABLE", "unreachable"
         OFFLINE = "OFFLINE", "offline"
         CONNECTIONBROKEN = "CONNECTIONBROKEN", "connection broken"
 
@@ -44,6 +46,12 @@ class Vehicle(models.Model):
     last_node_id = models.CharField(max_length=100, blank=True)
     last_node_sequence_id = models.PositiveIntegerField(null=True, blank=True)
     last_seen = models.DateTimeField(null=True, blank=True)
+    clock_skew = models.FloatField(
+        null=True, blank=True, help_text="seconds the vehicle's clock is behind ours (display only)"
+    )
+    protocol_counters = models.JSONField(
+        default=dict, blank=True, help_text="dropped duplicates, stale and malformed messages, gaps"
+    )
     created_at = models.DateTimeField(auto_now_add=True)
     updated_at = models.DateTimeField(auto_now=True)
 

@@ -28,6 +28,8 @@ SNAPSHOT_FIELDS = [
     "last_node_id",
     "last_node_sequence_id",
     "last_seen",
+    "clock_skew",
+    "protocol_counters",
 ]
 
 

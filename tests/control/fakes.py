@@ -4,8 +4,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import vda5050
-from control.controller import ActiveOrder, FlushBatch
 from control.execution import LayoutIndex, NodePlace
+from control.ports import ActiveOrder, FlushBatch
 
 LINE = LayoutIndex(
     "demo",

@@ -9,6 +9,14 @@ from tests.control.fakes import FakeStore, order, state
 STATE_TOPIC = "uagv/v2/sim/AGV-1/state"
 
 
+def orders_in(sent: list[tuple[str, dict]]) -> list[dict]:
+    return [message for topic, message in sent if topic.endswith("/order")]
+
+
+def instant_actions_in(sent: list[tuple[str, dict]]) -> list[str]:
+    return [a["actionType"] for t, m in sent if t.endswith("/instantActions") for a in m["actions"]]
+
+
 @pytest.fixture
 def sent() -> list[tuple[str, dict]]:
     return []
@@ -30,7 +38,7 @@ def test_an_idle_available_vehicle_gets_the_assigned_order(controller, sent) -> 
 
     controller.sync([order()])
 
-    topic, message = sent[0]
+    topic, message = [(t, m) for t, m in sent if t.endswith("/order")][0]
     assert topic == "uagv/v2/sim/AGV-1/order"
     assert message["orderId"] == "TO-7"
     assert message["orderUpdateId"] == 0
@@ -40,13 +48,13 @@ def test_an_idle_available_vehicle_gets_the_assigned_order(controller, sent) -> 
 
 def test_order_is_not_sent_before_the_vehicle_state_is_known(controller, sent) -> None:
     controller.sync([order()])
-    assert sent == []
+    assert orders_in(sent) == []
 
 
 def test_order_is_not_sent_to_a_busy_vehicle(controller, sent) -> None:
     controller.handle_message(STATE_TOPIC, state(order_id="OTHER", nodes=("x",)))
     controller.sync([order()])
-    assert sent == []
+    assert orders_in(sent) == []
 
 
 def test_progress_from_state_goes_to_the_flusher_in_order(controller) -> None:
@@ -124,7 +132,7 @@ def test_restarted_control_adopts_a_running_order_without_resending(controller, 
 
     controller.sync([order()])
 
-    assert sent == []
+    assert orders_in(sent) == []
     assert controller.fleet.by_pk(1).execution.phase is Phase.RUNNING
 
 
@@ -221,7 +229,7 @@ def test_an_order_whose_route_starts_elsewhere_goes_back_to_dispatch(controller,
     controller.sync([order()])
     controller.flush()
 
-    assert sent == []
+    assert orders_in(sent) == []
     requeued = controller.store.batches[-1].progress[-1]
     assert requeued.kind == "requeued"
     assert "route starts at a" in requeued.detail["reason"]
@@ -247,3 +255,131 @@ def test_cancel_before_the_vehicle_took_the_order_ends_on_no_order_to_cancel(
 
     assert [p.kind for p in controller.store.batches[-1].progress] == ["cancelled"]
     assert controller.fleet.by_pk(1).execution is None
+
+
+def test_first_contact_asks_for_the_factsheet_once(controller, sent) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    controller.handle_message(STATE_TOPIC, state(header_id=2))
+
+    assert instant_actions_in(sent) == ["factsheetRequest"]
+
+
+def test_reconnect_requests_state_and_factsheet(controller, sent) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    offline = {
+        "headerId": 9,
+        "timestamp": "2026-01-01T00:00:00.00Z",
+        "version": "2.0.0",
+        "manufacturer": "sim",
+        "serialNumber": "AGV-1",
+        "connectionState": "OFFLINE",
+    }
+    controller.handle_message("uagv/v2/sim/AGV-1/connection", json.dumps(offline).encode())
+    sent.clear()
+
+    online = {**offline, "connectionState": "ONLINE"}
+    controller.handle_message("uagv/v2/sim/AGV-1/connection", json.dumps(online).encode())
+
+    assert instant_actions_in(sent) == ["stateRequest", "factsheetRequest"]
+    assert controller.fleet.by_pk(1).connection == "ONLINE"
+
+
+def test_duplicate_and_older_states_are_not_applied(controller) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=5, last_node="b"))
+    controller.handle_message(STATE_TOPIC, state(header_id=5, last_node="c"))
+    controller.handle_message(STATE_TOPIC, state(header_id=4, last_node="d"))
+    controller.flush()
+
+    row = controller.store.batches[-1].snapshots[0]
+    assert row["last_node_id"] == "b"
+    assert row["protocol_counters"] == {"duplicates": 1, "stale": 1}
+
+
+def test_a_payload_from_another_vehicle_than_its_topic_is_dropped(controller) -> None:
+    controller.handle_message(STATE_TOPIC, state(serial="AGV-2"))
+    controller.flush()
+
+    assert controller.counters["identity_mismatch"] == 1
+    assert controller.fleet.by_pk(1).state is None
+    assert ("sim", "AGV-2") not in controller.fleet.vehicles
+    assert controller.store.batches[-1].snapshots[0]["protocol_counters"] == {
+        "identity_mismatch": 1
+    }
+
+
+def test_a_silent_vehicle_is_flushed_as_unreachable(controller, monkeypatch) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    controller.flush()
+    vehicle = controller.fleet.by_pk(1)
+    vehicle.session.last_alive_at -= vehicle.session.state_interval + 60
+
+    controller.flush()
+
+    assert controller.store.batches[-1].snapshots[0]["connection"] == "UNREACHABLE"
+    assert not vehicle.is_available
+
+
+def test_clock_skew_is_measured_from_the_state_timestamp(controller) -> None:
+    controller.handle_message(STATE_TOPIC, state())  # stamped 2026-01-01, long ago
+    controller.flush()
+
+    assert controller.store.batches[-1].snapshots[0]["clock_skew"] > 3600
+
+
+def test_garbage_on_unknown_serial_numbers_registers_nobody(controller) -> None:
+    for n in range(1000):
+        controller.handle_message(f"uagv/v2/evil/X{n}/state", b'{"headerId": "nope"}')
+        controller.handle_message(f"uagv/v2/evil/Y{n}/state", state(serial="AGV-1"))
+
+    assert set(controller.fleet.vehicles) == {("sim", "AGV-1")}
+    assert controller.counters["decode_errors"] == 1000
+    assert controller.counters["identity_mismatch"] == 1000
+
+
+def test_a_pause_command_becomes_start_pause_and_is_followed_to_its_end(controller, sent) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    sent.clear()
+
+    controller.execute({"kind": "vehicle.pause", "vehicle": 1, "request": "r-1"})
+    action_id = sent[-1][1]["actions"][0]["actionId"]
+    controller.handle_message(STATE_TOPIC, state(header_id=2, actions=((action_id, "FINISHED"),)))
+
+    assert instant_actions_in(sent) == ["startPause"]
+    track = controller.fleet.by_pk(1).instant_actions[action_id]
+    assert (track.action_type, track.status, track.request) == ("startPause", "FINISHED", "r-1")
+
+
+def test_actions_are_refused_in_manual_mode_and_without_a_declaring_factsheet(
+    controller, sent
+) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    sent.clear()
+
+    controller.execute(
+        {
+            "kind": "vehicle.instant_action",
+            "vehicle": 1,
+            "action_type": "logReport",
+            "parameters": {"reason": "x"},
+        }
+    )
+    vehicle = controller.fleet.by_pk(1)
+    vehicle.state.operating_mode = "MANUAL"
+    controller.execute({"kind": "vehicle.resume", "vehicle": 1})
+
+    assert sent == []
+    reasons = [t.reason for t in vehicle.instant_actions.values()]
+    assert reasons == [
+        "logReport needs a factsheet that declares it; none received yet",
+        "vehicle is in MANUAL mode, which takes no actions",
+    ]
+    assert controller.counters["refused_actions"] == 2
+
+
+def test_unknown_commands_are_counted_and_ignored(controller, sent) -> None:
+    controller.execute({"kind": "vehicle.pause", "vehicle": 999})
+    controller.execute({"kind": "bogus", "vehicle": 1})
+    controller.execute({"kind": "order.assigned", "order": 3})
+
+    assert sent == []
+    assert controller.counters["bad_commands"] == 2

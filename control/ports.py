@@ -1,0 +1,45 @@
+"""What `control` exchanges with its database side, as plain data (no ORM here)."""
+
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from control.execution import LayoutIndex, Progress
+from control.live import LiveVehicle
+
+
+@dataclass(frozen=True)
+class ActiveOrder:
+    """An assigned transport order as `control` needs it (read from the database by the store)."""
+
+    transport_order_id: int
+    vda_order_id: str
+    vehicle_pk: int
+    route: list[str]
+    pickup_node: str
+    map_id: str
+    pick_station: str
+    drop_station: str
+    load_id: str = ""
+    load_type: str = "EPAL"
+    cancel_requested: bool = False
+
+
+@dataclass
+class FlushBatch:
+    """What the flusher writes in one go."""
+
+    new_vehicles: list[LiveVehicle] = field(default_factory=list)
+    snapshots: list[dict[str, Any]] = field(default_factory=list)
+    factsheets: dict[int, dict[str, Any]] = field(default_factory=dict)
+    progress: list[Progress] = field(default_factory=list)
+    newly_available: int = 0
+
+
+class Store(Protocol):
+    """The database side of `control` (see control.persistence.DjangoStore)."""
+
+    def load_layouts(self) -> dict[str, LayoutIndex]: ...
+    def load_vehicles(self) -> list[dict[str, Any]]: ...
+    def active_orders(self) -> list[ActiveOrder]: ...
+    def flush(self, batch: FlushBatch) -> dict[tuple[str, str], int]: ...
+    def request_dispatch(self) -> None: ...

@@ -1,0 +1,99 @@
+"""The protocol session with one vehicle: liveness, header ids and clock skew.
+
+Pure logic, driven by the controller with the receive time. REFERENCE H.38: the retained
+`connection` topic is not a health check (after a broker crash it can say ONLINE for a vehicle
+that is gone), so liveness also needs a state timeout. REFERENCE §2: header ids count per topic;
+we drop duplicates and older messages of the same connection, count gaps, and start counting
+afresh after a new ONLINE. Vehicle timestamps are never used for ordering, only to show skew.
+"""
+
+import enum
+from collections import Counter
+from dataclasses import dataclass, field
+
+DEFAULT_STATE_INTERVAL = 30.0  # seconds; REFERENCE F.30 "at the latest every 30 s"
+TIMEOUT_GRACE = 5.0  # seconds on top of the interval before a vehicle counts as unreachable
+HEADER_WRAP = 2**32
+
+
+class Verdict(enum.Enum):
+    APPLY = "apply"
+    DUPLICATE = "duplicate"
+    STALE = "stale"
+
+
+class Link(enum.StrEnum):
+    """What we believe about the vehicle's connection (stored as `robots.Vehicle.connection`)."""
+
+    UNKNOWN = "UNKNOWN"
+    ONLINE = "ONLINE"
+    UNREACHABLE = "UNREACHABLE"
+    OFFLINE = "OFFLINE"
+    CONNECTIONBROKEN = "CONNECTIONBROKEN"
+
+
+# 3.0 spellings and states map onto the 2.x ones we store.
+_REPORTED = {"CONNECTION_BROKEN": Link.CONNECTIONBROKEN, "HIBERNATING": Link.ONLINE}
+
+
+@dataclass
+class ProtocolSession:
+    """Liveness and message-order bookkeeping for one vehicle."""
+
+    reported: Link = Link.UNKNOWN
+    last_state_at: float | None = None  # our monotonic clock
+    last_alive_at: float | None = None  # last state or ONLINE, our monotonic clock
+    state_interval: float = DEFAULT_STATE_INTERVAL
+    clock_skew: float | None = None  # seconds our clock is ahead of the vehicle's
+    counters: Counter[str] = field(default_factory=Counter)
+    _last_header: dict[str, int] = field(default_factory=dict)
+
+    def check_header(self, kind: str, header_id: int) -> Verdict:
+        """Whether a message with `header_id` on topic `kind` is new, a duplicate or stale."""
+        last = self._last_header.get(kind)
+        if last is not None:
+            ahead = (header_id - last) % HEADER_WRAP  # wrap-around safe distance
+            if ahead == 0:
+                self.counters["duplicates"] += 1
+                return Verdict.DUPLICATE
+            if ahead > HEADER_WRAP // 2:
+                self.counters["stale"] += 1
+                return Verdict.STALE
+            if ahead > 1:
+                self.counters["gaps"] += ahead - 1
+        self._last_header[kind] = header_id
+        return Verdict.APPLY
+
+    def on_connection(self, reported: str, now: float) -> bool:
+        """Take a `connection` message; True when the vehicle (re)connected and needs a
+        stateRequest and factsheetRequest to reconcile."""
+        link = _REPORTED.get(reported) or Link(reported)
+        reconnected = link is Link.ONLINE and self.link(now) is not Link.ONLINE
+        if link is Link.ONLINE:
+            # A new connection may restart header ids at 0: accept whatever comes next.
+            self._last_header.clear()
+            self.last_alive_at = now
+        self.reported = link
+        return reconnected
+
+    def on_state(self, now: float, skew: float | None) -> bool:
+        """Take a state; True if the vehicle was silent or unknown before (reconcile it)."""
+        woke_up = self.last_state_at is None or self.timed_out(now)
+        self.last_state_at = self.last_alive_at = now
+        self.clock_skew = skew
+        if self.reported is not Link.ONLINE:
+            # A vehicle that sends state is connected, whatever a stale retained message said.
+            self.reported = Link.ONLINE
+        return woke_up
+
+    def timed_out(self, now: float) -> bool:
+        """No state (nor ONLINE) for longer than the vehicle's state interval plus grace."""
+        if self.last_alive_at is None:
+            return False
+        return now - self.last_alive_at > self.state_interval + TIMEOUT_GRACE
+
+    def link(self, now: float) -> Link:
+        """The connection as the registry and dispatch should see it right now."""
+        if self.reported is Link.ONLINE and (self.last_alive_at is None or self.timed_out(now)):
+            return Link.UNREACHABLE
+        return self.reported
