@@ -22,10 +22,29 @@ class Capabilities:
     """The actions a vehicle declared in its factsheet, by action type."""
 
     actions: Mapping[str, vda5050.AgvAction]
+    max_order_nodes: int | None = None  # maxArrayLens order.nodes / order.edges + 1
+    min_order_interval: float = 0.0  # seconds between two orders or updates
 
     @classmethod
     def from_factsheet(cls, factsheet: vda5050.Factsheet) -> "Capabilities":
-        return cls({a.action_type: a for a in factsheet.protocol_features.agv_actions})
+        limits = factsheet.protocol_limits
+        arrays = [
+            n
+            for n in (
+                limits.max_array_lens.order_nodes,
+                _plus_one(limits.max_array_lens.order_edges),
+            )
+            if n
+        ]
+        return cls(
+            {a.action_type: a for a in factsheet.protocol_features.agv_actions},
+            max_order_nodes=min(arrays) if arrays else None,  # 0/absent = no limit (J.44)
+            min_order_interval=limits.timing.min_order_interval or 0.0,
+        )
+
+
+def _plus_one(value: int | None) -> int | None:
+    return value + 1 if value else None
 
 
 def refuse_instant_action(

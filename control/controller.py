@@ -18,7 +18,8 @@ from typing import Any
 import vda5050
 from control import snapshots
 from control.capabilities import refuse_instant_action
-from control.execution import LayoutIndex, OrderExecution, Phase, Progress, build_order
+from control.driver import OrderDriver
+from control.execution import LayoutIndex
 from control.live import Fleet, InstantActionTrack, LiveVehicle
 from control.ports import ActiveOrder, FlushBatch, Store
 from control.publisher import Publish, Publisher
@@ -39,10 +40,13 @@ _VEHICLE_COMMANDS: dict[str, tuple[str, dict[str, Any]]] = {
 class Controller:
     """The live fleet and everything `control` decides; MQTT and the database are injected."""
 
-    RESEND_AFTER = 5.0  # seconds without acceptance before an order is sent again
-
     def __init__(
-        self, *, store: Store, interface_name: str, publish: Publish | None = None
+        self,
+        *,
+        store: Store,
+        interface_name: str,
+        publish: Publish | None = None,
+        base_ahead: int | None = None,
     ) -> None:
         self.store = store
         self.interface_name = interface_name
@@ -51,10 +55,7 @@ class Controller:
         self.counters: Counter[str] = Counter()
         self.publisher = Publisher(publish, self.counters)
         self.lock = threading.RLock()
-        self._progress: list[Progress] = []
-        # Orders that ended in memory; the database may list them as active until the next
-        # flush, and sync must not adopt them again.
-        self._ended: set[int] = set()
+        self.driver = OrderDriver(self.publisher, lambda: self.layouts, base_ahead=base_ahead)
 
     def load(self) -> None:
         """Rebuild from the database: layouts and known vehicles (their state comes over MQTT)."""
@@ -122,19 +123,7 @@ class Controller:
     def on_state(self, vehicle: LiveVehicle, state: vda5050.State) -> None:
         if vehicle.apply_state(state, received_at=datetime.now(UTC)):
             self._reconcile(vehicle, reconnected=False)
-        execution = vehicle.execution
-        if execution is None:
-            return
-        progress = execution.observe(state)
-        fatal = execution.fatal_error(state)
-        if fatal is not None:
-            progress.append(fatal)
-        if any(p.kind == "failed" for p in progress) and state.order_id == execution.vda_order_id:
-            self._send_cancel(vehicle, execution)  # the vehicle keeps its order until cancelled
-        self._progress.extend(progress)
-        if execution.phase is Phase.DONE:
-            self._ended.add(execution.transport_order_id)
-            vehicle.execution = None
+        self.driver.on_state(vehicle, state)
 
     def on_connection(self, vehicle: LiveVehicle, message: vda5050.Connection) -> None:
         if vehicle.apply_connection(message, received_at=datetime.now(UTC)):
@@ -183,89 +172,9 @@ class Controller:
     # Outbound ----------------------------------------------------------------------------------
 
     def sync(self, orders: list[ActiveOrder]) -> None:
-        """Start, adopt, resend or cancel the assigned orders read from the database."""
+        """Start, adopt, extend, resend or cancel the assigned orders read from the database."""
         with self.lock:
-            self._ended &= {o.transport_order_id for o in orders}  # forget what the DB closed
-            for order in orders:
-                if order.transport_order_id in self._ended:
-                    continue
-                vehicle = self.fleet.by_pk(order.vehicle_pk)
-                if vehicle is not None:
-                    self._sync_one(vehicle, order)
-
-    def _sync_one(self, vehicle: LiveVehicle, order: ActiveOrder) -> None:
-        execution = vehicle.execution
-        if execution is not None and execution.transport_order_id != order.transport_order_id:
-            return  # finishing another order; this one waits
-        if execution is None:
-            execution = self._start(vehicle, order)
-            if execution is None:
-                return
-        if order.cancel_requested and execution.phase in {Phase.SENT, Phase.RUNNING}:
-            self._send_cancel(vehicle, execution)
-        elif execution.phase is Phase.SENT and (
-            time.monotonic() - execution.sent_monotonic > self.RESEND_AFTER
-        ):
-            self._publish_order(vehicle, order, execution)  # identical content: REFERENCE B.14
-
-    def _start(self, vehicle: LiveVehicle, order: ActiveOrder) -> OrderExecution | None:
-        state = vehicle.state
-        if state is None or order.map_id not in self.layouts:
-            return None
-        execution = OrderExecution.plan(
-            transport_order_id=order.transport_order_id,
-            vda_order_id=order.vda_order_id,
-            route=order.route,
-            pickup=order.pickup_node,
-        )
-        if state.order_id == order.vda_order_id:
-            vehicle.execution = execution  # restarted mid-order: adopt, never resend
-            self._progress.extend(execution.observe(state))
-            return execution
-        if order.cancel_requested:
-            self._end(Progress("cancelled", order.transport_order_id))
-            return None
-        if not (vehicle.is_available and vehicle.is_idle):
-            return None
-        if state.last_node_id != order.route[0]:
-            self._end(
-                Progress(
-                    "requeued",
-                    order.transport_order_id,
-                    {
-                        "reason": f"vehicle is at {state.last_node_id}, "
-                        f"route starts at {order.route[0]}"
-                    },
-                )
-            )
-            return None
-        vehicle.execution = execution
-        self._publish_order(vehicle, order, execution)
-        return execution
-
-    def _end(self, progress: Progress) -> None:
-        self._progress.append(progress)
-        self._ended.add(progress.order_id)
-
-    def _publish_order(
-        self, vehicle: LiveVehicle, order: ActiveOrder, execution: OrderExecution
-    ) -> None:
-        nodes, edges = build_order(
-            execution,
-            self.layouts[order.map_id],
-            load_id=order.load_id,
-            load_type=order.load_type,
-            pick_station=order.pick_station,
-            drop_station=order.drop_station,
-        )
-        self.publisher.order(
-            vehicle, order_id=execution.vda_order_id, order_update_id=0, nodes=nodes, edges=edges
-        )
-        execution.sent_monotonic = time.monotonic()
-
-    def _send_cancel(self, vehicle: LiveVehicle, execution: OrderExecution) -> None:
-        action_id = execution.start_cancel()
-        self.publisher.instant_action(vehicle, "cancelOrder", action_id=action_id)
+            self.driver.sync(self.fleet.by_pk, orders)
 
     def execute(self, command: dict[str, Any]) -> None:
         """Carry out a command from web or Celery (fleet.control_queue).
@@ -319,7 +228,7 @@ class Controller:
         """Take what changed since the last flush (under the lock, without I/O)."""
         batch = FlushBatch()
         with self.lock:
-            batch.progress, self._progress = self._progress, []
+            batch.progress, self.driver.progress = self.driver.progress, []
             now = time.monotonic()
             for vehicle in self.fleet.vehicles.values():
                 link = vehicle.session.link(now)
@@ -362,7 +271,7 @@ class Controller:
 
     def _requeue(self, batch: FlushBatch) -> None:
         with self.lock:
-            self._progress[:0] = batch.progress
+            self.driver.progress[:0] = batch.progress
             for vehicle in self.fleet.vehicles.values():
                 if vehicle.pk is None or vehicle.pk in {s["pk"] for s in batch.snapshots}:
                     vehicle.needs_flush = True

@@ -10,7 +10,6 @@ import uuid
 from dataclasses import dataclass, field
 
 import vda5050
-from vda5050.enums import BlockingType
 
 TERMINAL = {"FINISHED", "FAILED"}
 
@@ -42,6 +41,15 @@ class Phase(enum.StrEnum):
 
 
 @dataclass(frozen=True)
+class Window:
+    """Route indices `first`..`last` go out; `first`..`released` are base, the rest horizon."""
+
+    first: int
+    last: int
+    released: int
+
+
+@dataclass(frozen=True)
 class Progress:
     """Something that happened to a transport order, to be persisted by the flusher."""
 
@@ -64,6 +72,25 @@ class OrderExecution:
     sent_monotonic: float = field(default_factory=time.monotonic)
     cancel_action_id: str | None = None
     steps_done: set[str] = field(default_factory=set)
+    released_until: int = -1  # route index of the last base node sent
+    update_id: int = -1  # orderUpdateId of the latest message sent
+    confirmed_update: int = -1  # latest orderUpdateId the vehicle's state showed
+    attempts: int = 0  # sends of the latest message (resends are identical)
+    window: Window | None = None  # what the latest message carried
+
+    @property
+    def awaiting_confirmation(self) -> bool:
+        return self.update_id > self.confirmed_update
+
+    @property
+    def fully_released(self) -> bool:
+        return self.released_until >= len(self.route) - 1
+
+    def sent(self, update_id: int, window: Window) -> None:
+        """Record that a message (new, update or identical resend) went out."""
+        self.attempts = self.attempts + 1 if update_id == self.update_id else 1
+        self.update_id, self.window, self.released_until = update_id, window, window.released
+        self.sent_monotonic = time.monotonic()
 
     @classmethod
     def plan(
@@ -98,6 +125,10 @@ class OrderExecution:
         if self.phase is Phase.SENT:
             self.phase = Phase.RUNNING
             events.append(Progress("started", self.transport_order_id))
+        self.confirmed_update = max(self.confirmed_update, state.order_update_id)
+        if self.awaiting_confirmation and (rejected := self._rejection_error(state)):
+            self.phase = Phase.DONE
+            return [*events, Progress("failed", self.transport_order_id, {"reason": rejected})]
         for action_id, step in self.action_steps.items():
             status = statuses.get(action_id)
             if status == "FAILED":
@@ -135,7 +166,9 @@ class OrderExecution:
 
     def _is_complete(self, state: vda5050.State, statuses: dict[str, str]) -> bool:
         return (
-            not state.node_states
+            self.fully_released
+            and not self.awaiting_confirmation
+            and not state.node_states
             and not state.edge_states
             and all(statuses.get(a) in TERMINAL for a in self.action_steps)
             and state.last_node_id == self.route[-1]
@@ -148,84 +181,17 @@ class OrderExecution:
         return []
 
     def _rejection(self, state: vda5050.State) -> list[Progress]:
-        if self.phase is not Phase.SENT:
+        rejected = self._rejection_error(state) if self.phase is Phase.SENT else None
+        if rejected is None:
             return []
+        self.phase = Phase.DONE
+        return [Progress("failed", self.transport_order_id, {"reason": rejected})]
+
+    def _rejection_error(self, state: vda5050.State) -> str | None:
+        """The vehicle's reason if one of its errors references this order (REFERENCE B.15)."""
         for error in state.errors:
             refs = {(r.reference_key, r.reference_value) for r in error.error_references or []}
             if ("orderId", self.vda_order_id) in refs:
-                self.phase = Phase.DONE
-                reason = f"rejected by vehicle: {error.error_type} {error.error_description or ''}"
-                return [Progress("failed", self.transport_order_id, {"reason": reason.strip()})]
-        return []
-
-
-def build_order(
-    execution: OrderExecution,
-    layout: LayoutIndex,
-    *,
-    load_id: str,
-    load_type: str,
-    pick_station: str,
-    drop_station: str,
-) -> tuple[list[vda5050.Node], list[vda5050.Edge]]:
-    """The order's nodes and edges in traversal order, all released (the base).
-
-    Sequence ids follow REFERENCE A.2: nodes even from 0, edges odd. Pick and drop are HARD
-    blocking node actions so the vehicle stands still while handling the load.
-    """
-    nodes: list[vda5050.Node] = []
-    edges: list[vda5050.Edge] = []
-    last = len(execution.route) - 1
-    for index, node_id in enumerate(execution.route):
-        if index:
-            previous = execution.route[index - 1]
-            edges.append(
-                vda5050.Edge(
-                    edge_id=layout.edges[(previous, node_id)],
-                    sequence_id=2 * index - 1,
-                    released=True,
-                    start_node_id=previous,
-                    end_node_id=node_id,
-                    actions=[],
-                )
-            )
-        actions = []
-        if index == execution.pick_index:
-            actions.append(
-                _load_action("pick", execution.pick_action_id, load_id, load_type, pick_station)
-            )
-        if index == last:
-            actions.append(
-                _load_action("drop", execution.drop_action_id, load_id, load_type, drop_station)
-            )
-        place = layout.nodes[node_id]
-        nodes.append(
-            vda5050.Node(
-                node_id=node_id,
-                sequence_id=2 * index,
-                released=True,
-                node_position=vda5050.NodePosition(
-                    x=place.x, y=place.y, theta=place.theta, map_id=place.map_id
-                ),
-                actions=actions,
-            )
-        )
-    return nodes, edges
-
-
-def _load_action(
-    action_type: str, action_id: str, load_id: str, load_type: str, station: str
-) -> vda5050.Action:
-    parameters = [
-        vda5050.ActionParameter(key="stationType", value="floor"),
-        vda5050.ActionParameter(key="stationName", value=station),
-        vda5050.ActionParameter(key="loadType", value=load_type or "EPAL"),
-    ]
-    if load_id:
-        parameters.append(vda5050.ActionParameter(key="loadId", value=load_id))
-    return vda5050.Action(
-        action_type=action_type,
-        action_id=action_id,
-        blocking_type=BlockingType.HARD,
-        action_parameters=parameters,
-    )
+                text = f"{error.error_type} {error.error_description or ''}".strip()
+                return f"rejected by vehicle: {text}"
+        return None

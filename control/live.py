@@ -52,6 +52,7 @@ class LiveVehicle:
     visual_position: vda5050.AgvPosition | None = None
     last_seen: datetime | None = None
     execution: OrderExecution | None = None
+    last_order_sent: float = float("-inf")  # monotonic; for the factsheet's minOrderInterval
     needs_flush: bool = True
     needs_broadcast: bool = True
     was_available: bool = False

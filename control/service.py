@@ -14,7 +14,11 @@ from fleet.realtime import LIVE_GROUP, broadcast
 
 def build_control_loop() -> ControlLoop:
     """The control loop for the configured broker and interface (not yet running)."""
-    controller = Controller(store=DjangoStore(), interface_name=settings.VDA5050_INTERFACE)
+    controller = Controller(
+        store=DjangoStore(),
+        interface_name=settings.VDA5050_INTERFACE,
+        base_ahead=settings.FLEET_CONTROL["BASE_AHEAD"] or None,
+    )
     client, address = make_client(settings.MQTT_URL, client_id_prefix="fleet-control")
     link = MqttLink(client, address.host, address.port, controller)
     return ControlLoop(

@@ -132,6 +132,9 @@ FLEET_CONTROL = {
     "FLUSH_INTERVAL": env.float("FLEET_FLUSH_INTERVAL", default=1.0),
     "BROADCAST_INTERVAL": env.float("FLEET_BROADCAST_INTERVAL", default=0.2),
     "SYNC_INTERVAL": env.float("FLEET_SYNC_INTERVAL", default=1.0),
+    # How many route nodes ahead of a vehicle are released (its VDA 5050 base); the rest is
+    # sent as horizon and released with order updates as the vehicle advances. 0 = all at once.
+    "BASE_AHEAD": env.int("FLEET_BASE_AHEAD", default=3),
 }
 
 AUTH_PASSWORD_VALIDATORS = [

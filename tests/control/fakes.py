@@ -72,9 +72,13 @@ def state(
     errors: tuple[tuple[str, str, str], ...] = (),
     driving: bool = False,
     serial: str = "AGV-1",
+    update_id: int = 0,
+    horizon: tuple[str, ...] = (),
 ) -> bytes:
-    """An encoded 2.0.0 state: `nodes` still to drive, `actions` (id, status), `errors`
-    (type, level, referenced orderId)."""
+    """An encoded 2.0.0 state on ROUTE a-b-c-d: `nodes` still to drive (released), `horizon`
+    (unreleased), `actions` (id, status), `errors` (type, level, referenced orderId).
+    Sequence ids are those of the route: 2·index for nodes, one less for the edge into it."""
+    pending = [(n, True) for n in nodes] + [(n, False) for n in horizon]
     message = vda5050.State(
         header_id=header_id,
         timestamp="2026-01-01T00:00:00.00Z",
@@ -82,18 +86,17 @@ def state(
         manufacturer="sim",
         serial_number=serial,
         order_id=order_id,
-        order_update_id=0,
+        order_update_id=update_id,
         last_node_id=last_node,
-        last_node_sequence_id=0,
+        last_node_sequence_id=_seq(last_node),
         driving=driving,
         operating_mode=vda5050.OperatingMode.AUTOMATIC,
         node_states=[
-            vda5050.NodeState(node_id=n, sequence_id=2 * (i + 1), released=True)
-            for i, n in enumerate(nodes)
+            vda5050.NodeState(node_id=n, sequence_id=_seq(n), released=r) for n, r in pending
         ],
         edge_states=[
-            vda5050.EdgeState(edge_id=f"e{i}", sequence_id=2 * i + 1, released=True)
-            for i, _ in enumerate(nodes)
+            vda5050.EdgeState(edge_id=f"e{i}", sequence_id=_seq(n) - 1, released=r)
+            for i, (n, r) in enumerate(pending)
         ],
         action_states=[
             vda5050.ActionState(action_id=a, action_status=vda5050.ActionStatus(s))
@@ -116,3 +119,10 @@ def state(
         ),
     )
     return vda5050.encode(message)
+
+
+ROUTE = ["a", "b", "c", "d"]
+
+
+def _seq(node: str) -> int:
+    return 2 * ROUTE.index(node) if node in ROUTE else 0

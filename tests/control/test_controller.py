@@ -2,6 +2,7 @@ import json
 
 import pytest
 
+from control.capabilities import Capabilities
 from control.controller import Controller
 from control.execution import Phase
 from tests.control.fakes import FakeStore, order, state
@@ -383,3 +384,127 @@ def test_unknown_commands_are_counted_and_ignored(controller, sent) -> None:
 
     assert sent == []
     assert controller.counters["bad_commands"] == 2
+
+
+@pytest.fixture
+def stepwise(sent) -> Controller:
+    """A controller that releases one node ahead of the vehicle at a time."""
+    ctrl = Controller(
+        store=FakeStore(),
+        interface_name="uagv",
+        publish=lambda topic, payload, qos: sent.append((topic, json.loads(payload))),
+        base_ahead=1,
+    )
+    ctrl.load()
+    return ctrl
+
+
+def released(message: dict) -> list[tuple[str, int, bool]]:
+    return [(n["nodeId"], n["sequenceId"], n["released"]) for n in message["nodes"]]
+
+
+def test_B9_updates_stitch_at_the_last_base_node_as_the_vehicle_advances(stepwise, sent) -> None:
+    stepwise.handle_message(STATE_TOPIC, state(header_id=1))
+    stepwise.sync([order()])
+    stepwise.handle_message(
+        STATE_TOPIC, state(header_id=2, order_id="TO-7", nodes=("b",), horizon=("c", "d"))
+    )
+    stepwise.handle_message(
+        STATE_TOPIC,
+        state(header_id=3, order_id="TO-7", last_node="b", horizon=("c", "d")),
+    )
+    stepwise.handle_message(  # the update is not confirmed yet: nothing more goes out
+        STATE_TOPIC,
+        state(header_id=4, order_id="TO-7", last_node="b", horizon=("c", "d")),
+    )
+
+    first, update = orders_in(sent)
+    assert released(first) == [("a", 0, True), ("b", 2, True), ("c", 4, False), ("d", 6, False)]
+    assert update["orderUpdateId"] == 1
+    assert released(update) == [("b", 2, True), ("c", 4, True), ("d", 6, False)]
+    assert update["nodes"][0]["actions"] == first["nodes"][1]["actions"]  # pick, unchanged
+
+
+def test_G35_an_order_is_finished_only_when_the_whole_route_was_released(stepwise, sent) -> None:
+    stepwise.handle_message(STATE_TOPIC, state(header_id=1))
+    stepwise.sync([order()])
+    stepwise.handle_message(
+        STATE_TOPIC,
+        state(header_id=2, order_id="TO-7", last_node="b", actions=(("TO-7-pick", "FINISHED"),)),
+    )
+    stepwise.handle_message(
+        STATE_TOPIC,
+        state(
+            header_id=3,
+            order_id="TO-7",
+            update_id=1,
+            last_node="c",
+            actions=(("TO-7-pick", "FINISHED"),),
+        ),
+    )
+    stepwise.handle_message(
+        STATE_TOPIC,
+        state(
+            header_id=4,
+            order_id="TO-7",
+            update_id=2,
+            last_node="d",
+            actions=(("TO-7-pick", "FINISHED"), ("TO-7-drop", "FINISHED")),
+        ),
+    )
+    stepwise.flush()
+
+    assert [m["orderUpdateId"] for m in orders_in(sent)] == [0, 1, 2]
+    kinds = [p.kind for p in stepwise.store.batches[-1].progress]
+    assert kinds == ["started", "step", "step", "finished"]
+
+
+def test_B14_an_unconfirmed_order_is_resent_identically_then_fails_after_max_attempts(
+    controller, sent
+) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    controller.sync([order()])
+    execution = controller.fleet.by_pk(1).execution
+
+    for _ in range(controller.driver.MAX_ATTEMPTS):
+        execution.sent_monotonic -= controller.driver.RESEND_AFTER + 1
+        controller.sync([order()])
+    controller.flush()
+
+    sends = orders_in(sent)
+    assert len(sends) == controller.driver.MAX_ATTEMPTS
+    assert all(
+        (m["nodes"], m["edges"], m["orderUpdateId"]) == (sends[0]["nodes"], sends[0]["edges"], 0)
+        for m in sends
+    )
+    assert [m["headerId"] for m in sends] == list(range(len(sends)))
+    failed = controller.store.batches[-1].progress[-1]
+    assert failed.kind == "failed"
+    assert "did not confirm" in failed.detail["reason"]
+
+
+def test_J44_min_order_interval_holds_back_an_update_until_it_has_passed(stepwise, sent) -> None:
+    stepwise.handle_message(STATE_TOPIC, state(header_id=1))
+    vehicle = stepwise.fleet.by_pk(1)
+    vehicle.capabilities = Capabilities({}, min_order_interval=3600.0)
+    stepwise.sync([order()])
+    stepwise.handle_message(STATE_TOPIC, state(header_id=2, order_id="TO-7", last_node="b"))
+    held = len(orders_in(sent))
+    vehicle.last_order_sent -= 3600
+
+    stepwise.sync([order()])
+
+    assert held == 1
+    assert [m["orderUpdateId"] for m in orders_in(sent)] == [0, 1]
+
+
+def test_J44_a_message_never_carries_more_nodes_than_the_factsheet_allows(stepwise, sent) -> None:
+    stepwise.handle_message(STATE_TOPIC, state(header_id=1))
+    stepwise.fleet.by_pk(1).capabilities = Capabilities({}, max_order_nodes=2)
+    stepwise.driver.base_ahead = None
+
+    stepwise.sync([order()])
+
+    (message,) = orders_in(sent)
+    assert released(message) == [("a", 0, True), ("b", 2, True)]
+    assert len(message["edges"]) == 1

@@ -2,9 +2,18 @@ import msgspec
 import pytest
 
 import vda5050
-from control.execution import OrderExecution, Phase, build_order
+from control.execution import OrderExecution, Phase, Window
+from control.order_messages import (
+    LoadJob,
+    OrderLimits,
+    build_order,
+    extension_window,
+    initial_window,
+)
 from tests.control.fakes import LINE
 from tests.vda5050.support import validator
+
+JOB = LoadJob(load_id="L1", load_type="EPAL", pick_station="PICK-1", drop_station="DROP-1")
 
 
 def planned() -> OrderExecution:
@@ -15,14 +24,7 @@ def planned() -> OrderExecution:
 
 @pytest.mark.parametrize("version", ["2.0.0", "2.1.0"])
 def test_built_order_validates_against_the_official_schema(version: str) -> None:
-    nodes, edges = build_order(
-        planned(),
-        LINE,
-        load_id="L1",
-        load_type="EPAL",
-        pick_station="PICK-1",
-        drop_station="DROP-1",
-    )
+    nodes, edges = build_order(planned(), LINE, Window(0, 3, 1), JOB)
     message = vda5050.Order(
         header_id=0,
         timestamp=vda5050.now_timestamp(version),
@@ -44,9 +46,7 @@ def test_built_order_validates_against_the_official_schema(version: str) -> None
 
 def test_sequence_ids_and_actions_follow_the_route() -> None:
     execution = planned()
-    nodes, edges = build_order(
-        execution, LINE, load_id="", load_type="EPAL", pick_station="PICK-1", drop_station="DROP-1"
-    )
+    nodes, edges = build_order(execution, LINE, Window(0, 3, 3), JOB)
 
     assert [n.sequence_id for n in nodes] == [0, 2, 4, 6]
     assert [e.sequence_id for e in edges] == [1, 3, 5]
@@ -80,3 +80,43 @@ def _state_bytes(**kwargs: object) -> bytes:
     from tests.control.fakes import state
 
     return state(**kwargs)  # type: ignore[arg-type]
+
+
+def test_base_then_horizon_with_edges_released_only_between_released_nodes() -> None:
+    nodes, edges = build_order(planned(), LINE, Window(0, 3, 1), JOB)
+
+    assert [n.released for n in nodes] == [True, True, False, False]
+    assert [e.released for e in edges] == [True, False, False]
+
+
+def test_an_update_starts_at_the_stitching_node_with_its_sequence_id_and_actions() -> None:
+    execution = planned()
+    first, _ = build_order(execution, LINE, Window(0, 3, 1), JOB)
+
+    nodes, edges = build_order(execution, LINE, Window(1, 3, 2), JOB)
+
+    assert nodes[0] == first[1]  # same node id, sequence id 2, released, same pick action
+    assert [n.sequence_id for n in nodes] == [2, 4, 6]
+    assert [e.sequence_id for e in edges] == [3, 5]
+    assert [n.released for n in nodes] == [True, True, False]
+
+
+@pytest.mark.parametrize(
+    ("limits", "expected"),
+    [
+        (OrderLimits(), Window(0, 9, 9)),
+        (OrderLimits(base_ahead=2), Window(0, 9, 2)),
+        (OrderLimits(max_nodes=4), Window(0, 3, 3)),
+        (OrderLimits(max_nodes=4, base_ahead=1), Window(0, 3, 1)),
+    ],
+)
+def test_initial_window_respects_base_ahead_and_the_message_size_limit(limits, expected) -> None:
+    assert initial_window(10, limits) == expected
+
+
+def test_extension_follows_the_vehicle_and_stops_when_all_is_released() -> None:
+    limits = OrderLimits(max_nodes=4, base_ahead=2)
+
+    assert extension_window(10, released_until=2, passed=1, limits=limits) == Window(2, 5, 3)
+    assert extension_window(10, released_until=3, passed=1, limits=limits) is None
+    assert extension_window(10, released_until=8, passed=8, limits=limits) == Window(8, 9, 9)

@@ -1,0 +1,118 @@
+"""The VDA 5050 order messages of an execution: which part of the route goes out, and how.
+
+REFERENCE A.1-4 and B.9-12: an order carries nodes and edges in traversal order with sequence
+ids 2·i for the route's node i and 2·i−1 for the edge into it; a released prefix (the base) and
+an unreleased rest (the horizon). An update repeats the last base node (the stitching node, same
+sequence id and content) and goes on from there. The factsheet's `maxArrayLens` limits how many
+nodes one message may carry; `base_ahead` limits how far ahead of the vehicle the base reaches.
+"""
+
+from dataclasses import dataclass
+
+import vda5050
+from control.execution import LayoutIndex, OrderExecution, Window
+from vda5050.enums import BlockingType
+
+
+@dataclass(frozen=True)
+class OrderLimits:
+    """How much of a route one message carries and how far the base reaches."""
+
+    max_nodes: int | None = None  # factsheet maxArrayLens order.nodes (edges + 1); None = any
+    base_ahead: int | None = None  # released nodes ahead of the vehicle; None = the whole route
+    min_interval: float = 0.0  # factsheet timing.minOrderInterval, seconds
+
+
+@dataclass(frozen=True)
+class LoadJob:
+    """What the pick and drop actions carry."""
+
+    load_id: str
+    load_type: str
+    pick_station: str
+    drop_station: str
+
+
+def initial_window(route_length: int, limits: OrderLimits) -> Window:
+    """The window of a new order: from the vehicle's node (index 0)."""
+    return _window(0, route_length, passed=0, limits=limits)
+
+
+def extension_window(
+    route_length: int, released_until: int, passed: int, limits: OrderLimits
+) -> Window | None:
+    """The window of an update extending the base, or None if nothing more can be released."""
+    window = _window(released_until, route_length, passed=passed, limits=limits)
+    return window if window.released > released_until else None
+
+
+def _window(first: int, route_length: int, *, passed: int, limits: OrderLimits) -> Window:
+    end = route_length - 1
+    last = end if limits.max_nodes is None else min(end, first + max(limits.max_nodes, 2) - 1)
+    target = end if limits.base_ahead is None else passed + max(limits.base_ahead, 1)
+    return Window(first=first, last=last, released=max(first, min(last, target)))
+
+
+def build_order(
+    execution: OrderExecution, layout: LayoutIndex, window: Window, job: LoadJob
+) -> tuple[list[vda5050.Node], list[vda5050.Edge]]:
+    """The nodes and edges of route indices window.first..window.last.
+
+    Node i has sequence id 2·i, the edge into it 2·i−1, so an update's stitching node repeats
+    exactly what was sent before (same id, sequence id and actions). Pick and drop are HARD
+    blocking node actions so the vehicle stands still while handling the load.
+    """
+    route = execution.route
+    nodes: list[vda5050.Node] = []
+    edges: list[vda5050.Edge] = []
+    for index in range(window.first, window.last + 1):
+        released = index <= window.released
+        if index > window.first:
+            edges.append(
+                vda5050.Edge(
+                    edge_id=layout.edges[(route[index - 1], route[index])],
+                    sequence_id=2 * index - 1,
+                    released=released,  # both ends released: the earlier one is
+                    start_node_id=route[index - 1],
+                    end_node_id=route[index],
+                    actions=[],
+                )
+            )
+        place = layout.nodes[route[index]]
+        nodes.append(
+            vda5050.Node(
+                node_id=route[index],
+                sequence_id=2 * index,
+                released=released,
+                node_position=vda5050.NodePosition(
+                    x=place.x, y=place.y, theta=place.theta, map_id=place.map_id
+                ),
+                actions=_node_actions(execution, index, job),
+            )
+        )
+    return nodes, edges
+
+
+def _node_actions(execution: OrderExecution, index: int, job: LoadJob) -> list[vda5050.Action]:
+    actions = []
+    if index == execution.pick_index:
+        actions.append(_load_action("pick", execution.pick_action_id, job, job.pick_station))
+    if index == len(execution.route) - 1:
+        actions.append(_load_action("drop", execution.drop_action_id, job, job.drop_station))
+    return actions
+
+
+def _load_action(action_type: str, action_id: str, job: LoadJob, station: str) -> vda5050.Action:
+    parameters = [
+        vda5050.ActionParameter(key="stationType", value="floor"),
+        vda5050.ActionParameter(key="stationName", value=station),
+        vda5050.ActionParameter(key="loadType", value=job.load_type or "EPAL"),
+    ]
+    if job.load_id:
+        parameters.append(vda5050.ActionParameter(key="loadId", value=job.load_id))
+    return vda5050.Action(
+        action_type=action_type,
+        action_id=action_id,
+        blocking_type=BlockingType.HARD,
+        action_parameters=parameters,
+    )
