@@ -17,7 +17,7 @@ class Publisher:
     """Publishes orders and instant actions with header ids counted per vehicle and topic."""
 
     def __init__(self, publish: Publish | None, counters: Counter[str]) -> None:
-        self.publish: Publish = publish or (lambda topic, payload, qos: None)
+        self.publish: Publish = publish if publish is not None else _discard
         self.headers = HeaderCounter()
         self.counters = counters
 
@@ -71,3 +71,7 @@ class Publisher:
         )
         self.publish(str(topic), encode(message), 0)
         self.counters[f"sent_{kind}"] += 1
+
+
+def _discard(topic: str, payload: bytes, qos: int) -> None:
+    """The publish function until an MQTT link sets the real one."""

@@ -1,4 +1,5 @@
 import json
+from collections.abc import Iterator
 
 import pytest
 
@@ -6,6 +7,7 @@ from control.capabilities import Capabilities
 from control.controller import Controller
 from control.execution import Phase
 from tests.control.fakes import FakeStore, order, state
+from tests.vda5050.support import validator
 
 STATE_TOPIC = "uagv/v2/sim/AGV-1/state"
 
@@ -18,20 +20,38 @@ def instant_actions_in(sent: list[tuple[str, dict]]) -> list[str]:
     return [a["actionType"] for t, m in sent if t.endswith("/instantActions") for a in m["actions"]]
 
 
-@pytest.fixture
-def sent() -> list[tuple[str, dict]]:
-    return []
+class Published(list[tuple[str, dict]]):
+    """Every message the controller publishes; each must validate against the official schema
+    of its version and topic, in every test (the conformance fixture of issue 3)."""
+
+    problems: list[str]
+
+    def __call__(self, topic: str, payload: bytes, qos: int) -> None:
+        message = json.loads(payload)
+        kind = topic.rsplit("/", 1)[1]
+        # Collected, not raised: the controller's handlers catch exceptions by design.
+        self.problems += [
+            f"{kind}: {e.message}" for e in validator(message["version"], kind).iter_errors(message)
+        ]
+        if qos != 0:
+            self.problems.append(f"{kind} sent with QoS {qos}, not 0 (REFERENCE §2)")
+        self.append((topic, message))
 
 
 @pytest.fixture
-def controller(sent) -> Controller:
-    ctrl = Controller(
-        store=FakeStore(),
-        interface_name="uagv",
-        publish=lambda topic, payload, qos: sent.append((topic, json.loads(payload))),
-    )
+def sent() -> Iterator[Published]:
+    published = Published()
+    published.problems = []
+    yield published
+    assert published.problems == []
+
+
+@pytest.fixture
+def controller(sent) -> Iterator[Controller]:
+    ctrl = Controller(store=FakeStore(), interface_name="uagv", publish=sent)
     ctrl.load()
-    return ctrl
+    yield ctrl
+    assert ctrl.counters["handler_errors"] == 0
 
 
 def test_an_idle_available_vehicle_gets_the_assigned_order(controller, sent) -> None:
@@ -387,16 +407,17 @@ def test_unknown_commands_are_counted_and_ignored(controller, sent) -> None:
 
 
 @pytest.fixture
-def stepwise(sent) -> Controller:
+def stepwise(sent) -> Iterator[Controller]:
     """A controller that releases one node ahead of the vehicle at a time."""
     ctrl = Controller(
         store=FakeStore(),
         interface_name="uagv",
-        publish=lambda topic, payload, qos: sent.append((topic, json.loads(payload))),
+        publish=sent,
         base_ahead=1,
     )
     ctrl.load()
-    return ctrl
+    yield ctrl
+    assert ctrl.counters["handler_errors"] == 0
 
 
 def released(message: dict) -> list[tuple[str, int, bool]]:
