@@ -1,0 +1,87 @@
+"""1,000+ malformed, oversized, hostile and mismatched messages over a real broker never stop
+`control`: each is rejected and counted, and the next valid message is applied."""
+
+import json
+import time
+import uuid
+
+import paho.mqtt.client as mqtt
+import pytest
+from django.conf import settings
+from paho.mqtt.enums import CallbackAPIVersion
+
+from control.controller import Controller
+from control.runner import MqttLink
+from fleet.mqtt import BrokerAddress, make_client
+from tests.control.fakes import FakeStore, state
+
+pytestmark = pytest.mark.e2e
+
+
+def hostile_payloads() -> list[bytes]:
+    valid = json.loads(state())
+    deep = b"[" * 10_000 + b"]" * 10_000
+    return [
+        b"",
+        b"{",
+        b"null",
+        b"[]",
+        b"\xff\xfe\xfd",
+        deep,
+        b'{"headerId": NaN}',
+        b'{"headerId": Infinity}',
+        b'{"headerId": 1e400}',
+        b"x" * (2 * 1024 * 1024),
+        json.dumps({**valid, "headerId": "seven"}).encode(),
+        json.dumps({**valid, "batteryState": None}).encode(),
+        json.dumps({**valid, "nodeStates": [{"nodeId": 5}]}).encode(),
+        json.dumps({k: v for k, v in valid.items() if k != "orderId"}).encode(),
+        json.dumps({**valid, "errors": "none"}).encode(),
+    ]
+
+
+def test_a_flood_of_bad_messages_is_counted_and_the_next_good_one_applies() -> None:
+    url = settings.MQTT_URL
+    if settings.SERVICES.get("MQTT_URL", "").startswith("embedded"):
+        pytest.skip("needs a broker (Mosquitto)")
+    interface = f"hostile{uuid.uuid4().hex[:8]}"
+    controller = Controller(store=FakeStore(), interface_name=interface)
+    controller.load()
+    client, address = make_client(url, client_id_prefix="test-control")
+    link = MqttLink(client, address.host, address.port, controller)
+    link.start()
+    attacker = mqtt.Client(callback_api_version=CallbackAPIVersion.VERSION2)
+    broker = BrokerAddress.from_url(url)
+    attacker.connect(broker.host, broker.port)
+    attacker.loop_start()
+    try:
+        assert link.connected.wait(10)
+        topic = f"{interface}/v2/sim/AGV-1/state"
+        sent = 0
+        for round_ in range(70):
+            for payload in hostile_payloads():
+                attacker.publish(topic, payload, qos=1).wait_for_publish(5)
+                sent += 1
+            attacker.publish(f"{interface}/v2/sim/AGV-{round_}/state", state(serial="EVIL"), qos=1)
+            sent += 1
+        attacker.publish(topic, state(header_id=42, last_node="c"), qos=1).wait_for_publish(5)
+
+        deadline = time.monotonic() + 30
+        vehicle = controller.fleet.vehicles.get(("sim", "AGV-1"))
+        while (vehicle is None or vehicle.state is None) and time.monotonic() < deadline:
+            time.sleep(0.1)
+            vehicle = controller.fleet.vehicles.get(("sim", "AGV-1"))
+    finally:
+        attacker.loop_stop()
+        attacker.disconnect()
+        link.stop()
+
+    assert sent >= 1000
+    assert vehicle is not None
+    assert vehicle.state is not None
+    assert vehicle.state.last_node_id == "c"
+    assert controller.counters["decode_errors"] == 15 * 70
+    assert controller.counters["identity_mismatch"] == 70
+    assert controller.counters["handler_errors"] == 0
+    assert set(controller.fleet.vehicles) == {("sim", "AGV-1")}
+    print(f"hostile: {sent} bad messages rejected, counters {dict(controller.counters)}")
