@@ -69,6 +69,9 @@ class OrderDriver:
             progress.append(fatal)
         if any(p.kind == "failed" for p in progress) and state.order_id == execution.vda_order_id:
             self.cancel(vehicle, execution)  # the vehicle keeps its order until cancelled (G.36)
+        manual = execution.left_automatic(state)  # the vehicle cleared the order itself (G.37)
+        if manual is not None:
+            progress.append(manual)
         self.progress.extend(progress)
         if execution.phase is Phase.DONE:
             self._ended.add(execution.transport_order_id)

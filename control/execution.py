@@ -159,6 +159,15 @@ class OrderExecution:
         reason = "; ".join(f"{e.error_type}: {e.error_description or ''}".strip() for e in fatal)
         return Progress("failed", self.transport_order_id, {"reason": f"vehicle error {reason}"})
 
+    def left_automatic(self, state: vda5050.State) -> Progress | None:
+        """MANUAL, SERVICE and TEACHIN clear the vehicle's order (REFERENCE I.40, G.37)."""
+        mode = str(state.operating_mode)
+        if mode in {"AUTOMATIC", "SEMIAUTOMATIC"} or self.phase is Phase.DONE:
+            return None
+        self.phase = Phase.DONE
+        reason = f"vehicle switched to {mode} mode, which clears its order"
+        return Progress("failed", self.transport_order_id, {"reason": reason})
+
     def start_cancel(self) -> str:
         self.phase = Phase.CANCELLING
         self.cancel_action_id = f"cancel-{uuid.uuid4()}"

@@ -125,6 +125,8 @@ class LiveVehicle:
             and str(state.operating_mode) in {"AUTOMATIC", "SEMIAUTOMATIC"}
             and not state.paused
             and bool(state.last_node_id)
+            # F.33: an unlocalised vehicle cannot be routed (no position = line-guided, fine)
+            and (state.agv_position is None or state.agv_position.position_initialized)
             and not any(str(e.error_level) == "FATAL" for e in state.errors)
         )
 

@@ -74,6 +74,8 @@ def state(
     serial: str = "AGV-1",
     update_id: int = 0,
     horizon: tuple[str, ...] = (),
+    mode: str = "AUTOMATIC",
+    localized: bool = True,
 ) -> bytes:
     """An encoded 2.0.0 state on ROUTE a-b-c-d: `nodes` still to drive (released), `horizon`
     (unreleased), `actions` (id, status), `errors` (type, level, referenced orderId).
@@ -90,7 +92,7 @@ def state(
         last_node_id=last_node,
         last_node_sequence_id=_seq(last_node),
         driving=driving,
-        operating_mode=vda5050.OperatingMode.AUTOMATIC,
+        operating_mode=vda5050.OperatingMode(mode),
         node_states=[
             vda5050.NodeState(node_id=n, sequence_id=_seq(n), released=r) for n, r in pending
         ],
@@ -115,7 +117,7 @@ def state(
         ],
         safety_state=vda5050.SafetyState(e_stop=vda5050.EStop.NONE, field_violation=False),
         agv_position=vda5050.AgvPosition(
-            x=0.0, y=0.0, theta=0.0, map_id="demo", position_initialized=True
+            x=0.0, y=0.0, theta=0.0, map_id="demo", position_initialized=localized
         ),
     )
     return vda5050.encode(message)

@@ -529,3 +529,86 @@ def test_J44_a_message_never_carries_more_nodes_than_the_factsheet_allows(stepwi
     (message,) = orders_in(sent)
     assert released(message) == [("a", 0, True), ("b", 2, True)]
     assert len(message["edges"]) == 1
+
+
+@pytest.mark.parametrize(
+    ("changes", "why"),
+    [
+        ({"mode": "MANUAL"}, "I.40 manual mode takes no orders"),
+        ({"mode": "SERVICE"}, "I.40 service mode takes no orders"),
+        ({"localized": False}, "F.33 position not initialised"),
+        ({"errors": (("batteryEmpty", "FATAL", ""),)}, "G.36 FATAL error"),
+    ],
+)
+def test_I39_orders_go_only_to_vehicles_in_automatic_mode_localised_without_fatal_errors(
+    controller, sent, changes, why
+) -> None:
+    controller.handle_message(STATE_TOPIC, state(**changes))
+
+    controller.sync([order()])
+
+    assert orders_in(sent) == [], why
+
+
+def test_G36_a_fatal_error_fails_the_order_and_the_master_cancels_it(controller, sent) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    controller.sync([order()])
+
+    controller.handle_message(
+        STATE_TOPIC,
+        state(header_id=2, order_id="TO-7", nodes=("b",), errors=(("motorFault", "FATAL", ""),)),
+    )
+    controller.flush()
+
+    failed = controller.store.batches[-1].progress[-1]
+    assert failed.kind == "failed"
+    assert "motorFault" in failed.detail["reason"]
+    assert instant_actions_in(sent)[-1] == "cancelOrder"
+
+
+def test_G37_switching_to_manual_mid_order_fails_it_with_the_reason(controller) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    controller.sync([order()])
+    controller.handle_message(STATE_TOPIC, state(header_id=2, order_id="TO-7", nodes=("b",)))
+
+    controller.handle_message(STATE_TOPIC, state(header_id=3, order_id="TO-7", mode="MANUAL"))
+    controller.flush()
+
+    assert controller.store.batches[-1].progress[-1].detail == {
+        "reason": "vehicle switched to MANUAL mode, which clears its order"
+    }
+    assert controller.fleet.by_pk(1).execution is None
+
+
+def test_B15_a_rejected_update_fails_the_order_with_the_vehicle_reason(stepwise) -> None:
+    stepwise.handle_message(STATE_TOPIC, state(header_id=1))
+    stepwise.sync([order()])
+    stepwise.handle_message(STATE_TOPIC, state(header_id=2, order_id="TO-7", last_node="b"))
+
+    stepwise.handle_message(
+        STATE_TOPIC,
+        state(
+            header_id=3,
+            order_id="TO-7",
+            last_node="b",
+            errors=(("orderUpdateError", "WARNING", "TO-7"),),
+        ),
+    )
+    stepwise.flush()
+
+    failed = stepwise.store.batches[-1].progress[-1]
+    assert failed.kind == "failed"
+    assert failed.detail["reason"] == "rejected by vehicle: orderUpdateError"
+
+
+def test_D22_the_next_order_waits_until_cancel_order_has_finished(controller, sent) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    controller.handle_message(STATE_TOPIC, state(header_id=2, actions=(("cancel-x", "RUNNING"),)))
+
+    controller.sync([order()])
+    blocked = orders_in(sent)
+    controller.handle_message(STATE_TOPIC, state(header_id=3, actions=(("cancel-x", "FINISHED"),)))
+    controller.sync([order()])
+
+    assert blocked == []
+    assert len(orders_in(sent)) == 1
