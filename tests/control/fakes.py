@@ -7,6 +7,10 @@ import vda5050
 from control.execution import LayoutIndex, NodePlace
 from control.ports import ActiveOrder, FlushBatch
 
+# The protocol version the fake vehicle speaks; tests/control/conftest.py runs every controller
+# test once per version.
+PROTOCOL = {"version": "2.0.0"}
+
 LINE = LayoutIndex(
     "demo",
     nodes={n: NodePlace(float(i), 0.0, None, "demo") for i, n in enumerate(["a", "b", "c", "d"])},
@@ -31,7 +35,7 @@ class FakeStore:
                 "manufacturer": "sim",
                 "serial_number": "AGV-1",
                 "interface_name": "uagv",
-                "protocol_version": "2.0.0",
+                "protocol_version": PROTOCOL["version"],
             }
         ]
 
@@ -84,7 +88,7 @@ def state(
     message = vda5050.State(
         header_id=header_id,
         timestamp="2026-01-01T00:00:00.00Z",
-        version="2.0.0",
+        version=PROTOCOL["version"],
         manufacturer="sim",
         serial_number=serial,
         order_id=order_id,

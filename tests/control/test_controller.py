@@ -6,6 +6,7 @@ import pytest
 from control.capabilities import Capabilities
 from control.controller import Controller
 from control.execution import Phase
+from tests.control import fakes
 from tests.control.fakes import FakeStore, order, state
 from tests.vda5050.support import validator
 
@@ -18,6 +19,15 @@ def orders_in(sent: list[tuple[str, dict]]) -> list[dict]:
 
 def instant_actions_in(sent: list[tuple[str, dict]]) -> list[str]:
     return [a["actionType"] for t, m in sent if t.endswith("/instantActions") for a in m["actions"]]
+
+
+@pytest.fixture(params=["2.0.0", "2.1.0"], autouse=True)
+def protocol_version(request: pytest.FixtureRequest) -> Iterator[str]:
+    """Every test here runs once per supported protocol version of the vehicle."""
+    previous = fakes.PROTOCOL["version"]
+    fakes.PROTOCOL["version"] = request.param
+    yield request.param
+    fakes.PROTOCOL["version"] = previous
 
 
 class Published(list[tuple[str, dict]]):
