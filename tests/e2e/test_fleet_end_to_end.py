@@ -44,7 +44,10 @@ def fleet_env(tmp_path: Path) -> dict[str, str]:
     return env
 
 
-def test_five_orders_finish_with_three_vehicles(fleet_env: dict[str, str], tmp_path: Path) -> None:
+@pytest.mark.parametrize("version", ["2.0.0", "2.1.0"])
+def test_five_orders_finish_with_three_vehicles(
+    fleet_env: dict[str, str], tmp_path: Path, version: str
+) -> None:
     layout = create_layout(spec=warehouse_layout(columns=6, rows=4))
     layout_file = tmp_path / "layout.json"
     layout_file.write_text(json.dumps(layout_as_dict(map=layout)))
@@ -71,6 +74,8 @@ def test_five_orders_finish_with_three_vehicles(fleet_env: dict[str, str], tmp_p
                 fleet_env["VDA5050_INTERFACE"],
                 "--time-scale",
                 "10",
+                "--version",
+                version,
             ),
             fleet_env,
             tmp_path,
@@ -129,4 +134,5 @@ def test_five_orders_finish_with_three_vehicles(fleet_env: dict[str, str], tmp_p
         if last is not None:
             assert vehicle.last_node_id == last.destination.node.node_id, vehicle
         assert vehicle.errors == [], vehicle.errors
-    print(f"e2e: 5 orders finished by 3 vehicles in {duration:.1f} s")
+    assert set(Vehicle.objects.values_list("protocol_version", flat=True)) == {version}
+    print(f"e2e {version}: 5 orders finished by 3 vehicles in {duration:.1f} s")
