@@ -1,47 +1,21 @@
 """End to end on the real services: control, a Celery worker and 3 simulated vehicles as processes
 against Mosquitto, PostgreSQL and Redis; 5 transport orders must all finish."""
 
-import json
-import os
 import time
-import uuid
 from pathlib import Path
 
 import pytest
-from django.conf import settings
 
 from maps.demo import warehouse_layout
 from maps.models import Station
-from maps.selectors import layout_as_dict
 from maps.services import create_layout
 from orders.models import OrderEvent, TransportOrder
 from orders.services import create_transport_order
 from robots.models import Vehicle
-from tests.e2e.processes import Process, python, wait_until
+from tests.e2e.conftest import start_fleet
+from tests.e2e.processes import wait_until
 
 pytestmark = [pytest.mark.e2e, pytest.mark.django_db(transaction=True)]
-
-REAL = {name: settings.SERVICES.get(name, "") for name in ("DATABASE_URL", "REDIS_URL", "MQTT_URL")}
-
-
-@pytest.fixture
-def fleet_env(tmp_path: Path) -> dict[str, str]:
-    if any(not url.startswith(("postgres", "redis", "mqtt")) for url in REAL.values()):
-        pytest.skip(f"needs PostgreSQL, Redis and Mosquitto; have {REAL}")
-    db = settings.DATABASES["default"]
-    env = {key: value for key, value in os.environ.items() if not key.startswith("PYTEST")}
-    env.update(
-        {
-            "DJANGO_SETTINGS_MODULE": "fleet.settings",
-            "DATABASE_URL": f"postgres://{db['USER']}@{db['HOST']}:{db['PORT']}/{db['NAME']}",
-            "REDIS_URL": REAL["REDIS_URL"],
-            "MQTT_URL": REAL["MQTT_URL"],
-            "VDA5050_INTERFACE": f"e2e{uuid.uuid4().hex[:8]}",  # no crosstalk with other runs
-            "CELERY_TASK_ALWAYS_EAGER": "0",
-            "FLEET_FLUSH_INTERVAL": "0.5",
-        }
-    )
-    return env
 
 
 @pytest.mark.parametrize("version", ["2.0.0", "2.1.0"])
@@ -49,38 +23,7 @@ def test_five_orders_finish_with_three_vehicles(
     fleet_env: dict[str, str], tmp_path: Path, version: str
 ) -> None:
     layout = create_layout(spec=warehouse_layout(columns=6, rows=4))
-    layout_file = tmp_path / "layout.json"
-    layout_file.write_text(json.dumps(layout_as_dict(map=layout)))
-    processes = [
-        Process("control", python("manage.py", "run_control"), fleet_env, tmp_path),
-        Process(
-            "worker",
-            python("-m", "celery", "-A", "fleet", "worker", "--pool", "solo", "--loglevel", "INFO"),
-            fleet_env,
-            tmp_path,
-        ),
-        Process(
-            "simulator",
-            python(
-                "-m",
-                "simulator",
-                "--count",
-                "3",
-                "--layout",
-                str(layout_file),
-                "--broker",
-                fleet_env["MQTT_URL"],
-                "--interface",
-                fleet_env["VDA5050_INTERFACE"],
-                "--time-scale",
-                "10",
-                "--version",
-                version,
-            ),
-            fleet_env,
-            tmp_path,
-        ),
-    ]
+    processes = start_fleet(fleet_env, tmp_path, layout, vehicles=3, version=version)
     started = time.monotonic()
     try:
         wait_until(
