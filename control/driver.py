@@ -142,6 +142,8 @@ class OrderDriver:
         if execution.fully_released or state is None or state.order_id != execution.vda_order_id:
             return
         passed = (state.last_node_sequence_id or 0) // 2  # our sequence ids are 2·route index
+        if state.new_base_request:
+            passed = max(passed, execution.released_until)  # waiting at the decision point
         window = extension_window(
             len(execution.route), execution.released_until, passed, self._limits(vehicle)
         )

@@ -622,3 +622,16 @@ def test_D22_the_next_order_waits_until_cancel_order_has_finished(controller, se
 
     assert blocked == []
     assert len(orders_in(sent)) == 1
+
+
+def test_B12_new_base_request_releases_more_at_once(stepwise, sent) -> None:
+    stepwise.driver.base_ahead = 1
+    stepwise.handle_message(STATE_TOPIC, state(header_id=1))
+    stepwise.sync([order()])
+    stepwise.fleet.by_pk(1).last_order_sent -= 60
+    request = json.loads(state(header_id=2, order_id="TO-7", nodes=("b",), horizon=("c", "d")))
+
+    stepwise.handle_message(STATE_TOPIC, json.dumps({**request, "newBaseRequest": True}).encode())
+
+    first, update = orders_in(sent)
+    assert released(update) == [("b", 2, True), ("c", 4, True), ("d", 6, False)]
