@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from simulator.fleet import FleetConfig, SimulatedFleet
 from simulator.layout import Layout, LayoutError, LayoutNode, load_layout
+from simulator.misbehaviour import Misbehaviour
 from simulator.vehicle import StartPose, VehicleConfig, VirtualVehicle
 
 __all__ = [
@@ -16,6 +17,7 @@ __all__ = [
     "Layout",
     "LayoutError",
     "LayoutNode",
+    "Misbehaviour",
     "StartPose",
     "VehicleConfig",
     "VirtualVehicle",

@@ -1,6 +1,8 @@
 """Command line: ``python -m simulator --count N --layout FILE [options]``.
 
 Runs until SIGTERM/SIGINT, then every vehicle publishes OFFLINE and disconnects; exit 0.
+``--misbehave SERIAL:key=value,...`` (repeatable) and ``--script FILE.json`` make single
+vehicles misbehave for conformance tests (keys: :data:`simulator.misbehaviour.KEYS`).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from urllib.parse import unquote, urlsplit
 
 from simulator.fleet import FleetConfig, SimulatedFleet
 from simulator.layout import LayoutError, load_layout
+from simulator.misbehaviour import KEYS, build_plan
 from vda5050 import VDA5050Error
 
 log = logging.getLogger("simulator")
@@ -52,7 +55,13 @@ def _non_negative(text: str) -> float:
 def build_parser() -> argparse.ArgumentParser:
     """The CLI definition (kept separate so tests and docs can introspect it)."""
     parser = argparse.ArgumentParser(
-        prog="python -m simulator", description="Run N virtual VDA 5050 vehicles over MQTT."
+        prog="python -m simulator",
+        description="Run N virtual VDA 5050 vehicles over MQTT.",
+        epilog=(
+            "misbehaviour keys (times in simulated seconds from start; lists joined by '+'): "
+            + ", ".join(KEYS)
+            + ". Example: --misbehave 'AGV-2:reject_orders=orderError,reject_count=1'"
+        ),
     )
     add = parser.add_argument
     add("--count", type=int, required=True, help="number of vehicles")
@@ -68,6 +77,18 @@ def build_parser() -> argparse.ArgumentParser:
     add("--serial-prefix", default="AGV-", help="serial numbers are PREFIX1..PREFIXN")
     add("--tick-hz", type=_positive, default=10.0, help="simulation loop rate")
     add("--log-level", default="INFO", help="DEBUG, INFO, WARNING, ...")
+    add(
+        "--misbehave",
+        action="append",
+        default=[],
+        metavar="SERIAL:KEY=VALUE[,KEY=VALUE...]",
+        help="make one vehicle misbehave (repeatable), e.g. 'AGV-2:drop_orders=1'",
+    )
+    add(
+        "--script",
+        metavar="FILE.json",
+        help='misbehaviour script: [{"serial": "AGV-2", "reject_orders": "orderError"}, ...]',
+    )
     return parser
 
 
@@ -84,6 +105,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         host, port, user, password = parse_broker(args.broker)
         layout = load_layout(args.layout)
+        misbehaviours = build_plan(args.misbehave, args.script)
     except (ValueError, LayoutError) as exc:
         parser.error(str(exc))
     config = FleetConfig(
@@ -101,6 +123,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         state_interval=args.state_interval,
         serial_prefix=args.serial_prefix,
         tick_hz=args.tick_hz,
+        misbehaviours=misbehaviours,
     )
     try:
         fleet = SimulatedFleet(layout, config)

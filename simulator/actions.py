@@ -85,6 +85,13 @@ CATALOGUE: dict[str, ActionSpec] = {
         ActionSpec("stateRequest", (I,), ALL_BLOCKING, "Publish a state message now."),
         ActionSpec("factsheetRequest", (I,), ALL_BLOCKING, "Publish the factsheet now."),
         ActionSpec("initPosition", (I, N), HARD, "Set pose and lastNodeId.", 0.5, _INIT_PARAMS),
+        ActionSpec(
+            "logReport",
+            (I,),
+            ALL_BLOCKING,
+            "Write a log report (logged by the simulator; finishes at once).",
+            parameters=(_str("reason", "Why the report is requested.", optional=False),),
+        ),
     )
 }
 

@@ -6,16 +6,20 @@ parallel but stops driving, HARD runs alone and stops driving. Each status chang
 (WAITING → INITIALIZING → RUNNING → FINISHED/FAILED) happens on its own tick so that every
 intermediate status can appear in at least one published state.
 
-Instant actions other than ``cancelOrder`` take effect immediately when received.
+Instant actions other than ``cancelOrder`` take effect immediately when received. In
+MANUAL, SERVICE and TEACHIN mode only the read-only stateRequest, factsheetRequest and
+logReport are executed; every other instant action fails (REFERENCE §3 I.40).
 """
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 from simulator.actions import CATALOGUE, ActionRun, check_action
+from simulator.intake import ORDER_MODES
 from vda5050 import Action, Load, ParameterValue, action_params
 from vda5050.enums import ActionScope, ActionStatus, BlockingType
 
@@ -23,7 +27,10 @@ if TYPE_CHECKING:
     from simulator.orders import Step
     from simulator.vehicle import VirtualVehicle
 
+log = logging.getLogger(__name__)
+
 _STOPPING = (BlockingType.SOFT, BlockingType.HARD)
+_READ_ONLY = frozenset({"stateRequest", "factsheetRequest", "logReport"})
 
 
 class ActionExecutor:
@@ -82,6 +89,13 @@ class ActionExecutor:
             for action in step.node.actions:
                 self._runs[action.action_id] = ActionRun(action=action, node_key=step.key)
 
+    def abort_order(self, reason: str) -> None:
+        """The order is cleared (operating mode): every unfinished order action fails."""
+        for run in self._runs.values():
+            if run.node_key is not None and not run.terminal:
+                run.fail(reason)
+        self._queue = [run for run in self._queue if not run.terminal]
+
     def trigger_node(self, key: tuple[str, int]) -> None:
         """The vehicle reached node ``key``: queue its WAITING actions in list order."""
         self._queue += [
@@ -116,7 +130,7 @@ class ActionExecutor:
         self._queue = [run for run in self._queue if not run.terminal]
 
     def _finish(self, run: ActionRun) -> None:
-        failure = self._apply(run.action)
+        failure = self._effect(run.action)
         if failure is None:
             run.status = ActionStatus.FINISHED
         else:
@@ -149,6 +163,9 @@ class ActionExecutor:
             return
         vehicle = self._vehicle
         kind = action.action_type
+        if vehicle.operating_mode not in ORDER_MODES and kind not in _READ_ONLY:
+            run.fail(f"operating mode {vehicle.operating_mode} accepts no instant actions")
+            return
         if kind == "cancelOrder":
             self._cancel(run)
             return
@@ -160,11 +177,14 @@ class ActionExecutor:
             vehicle.mark_state_due()
         elif kind == "factsheetRequest":
             vehicle.factsheet_due = True
+        elif kind == "logReport":
+            reason = action_params(action).get("reason")
+            log.info("%s: logReport: %s", vehicle.config.serial_number, reason)
         elif kind == "initPosition" and not idle:
             run.fail("initPosition is only accepted while the vehicle is idle")
             return
         else:
-            failure = self._apply(action)
+            failure = self._effect(action)
             if failure is not None:
                 run.fail(failure)
                 return
@@ -185,6 +205,14 @@ class ActionExecutor:
         self._cancels.append(run)
 
     # ------------------------------------------------------------------ effects
+    def _effect(self, action: Action) -> str | None:
+        """Apply an action unless the misbehaviour makes it fail; failure reason or None."""
+        vehicle = self._vehicle
+        if vehicle.saboteur.action_fails(action.action_type):
+            vehicle.report_action_failure(action.action_id, action.action_type)
+            return f"{action.action_type} failed (simulated misbehaviour)"
+        return self._apply(action)
+
     def _apply(self, action: Action) -> str | None:
         """Carry out the effect of a finished action; returns a failure reason or None."""
         vehicle = self._vehicle

@@ -7,6 +7,11 @@ Programmatic API used by the CLI and by tests::
     fleet.wait_connected(5.0)
     ...
     fleet.stop()   # every vehicle publishes OFFLINE, then disconnects
+
+Misbehaviour for conformance tests (see :mod:`simulator.misbehaviour`)::
+
+    fleet.misbehave("AGV-2", reject_orders="orderError", reject_count=1)
+    fleet.misbehave("AGV-2")   # behave again
 """
 
 from __future__ import annotations
@@ -14,15 +19,17 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from types import TracebackType
+from typing import Any
 
 from simulator.layout import Layout
+from simulator.misbehaviour import Misbehaviour
 from simulator.mqtt import KEEPALIVE_SECONDS, BrokerSettings, VehicleLink
 from simulator.vehicle import StartPose, VehicleConfig, VirtualVehicle
-from vda5050.enums import ErrorLevel
+from vda5050.enums import ErrorLevel, OperatingMode
 
 log = logging.getLogger(__name__)
 
@@ -46,6 +53,8 @@ class FleetConfig:
     serial_prefix: str = "AGV-"
     tick_hz: float = 10.0
     keepalive: int = KEEPALIVE_SECONDS
+    misbehaviours: Mapping[str, Misbehaviour] = field(default_factory=dict)
+    """Scripted misbehaviour by serial number (``--misbehave`` / ``--script``)."""
 
     def serial(self, index: int) -> str:
         """Serial number of vehicle ``index`` (0-based): prefix + 1-based number."""
@@ -67,6 +76,7 @@ def build_vehicles(layout: Layout, config: FleetConfig) -> list[VirtualVehicle]:
             time_scale=config.time_scale,
             state_interval=config.state_interval,
             visualization_hz=config.visualization_hz,
+            misbehaviour=config.misbehaviours.get(config.serial(i), Misbehaviour()),
         )
         vehicles.append(VirtualVehicle(vehicle_config, start, known_nodes=known))
     return vehicles
@@ -79,6 +89,10 @@ class SimulatedFleet:
         self.config = config or FleetConfig()
         if self.config.count < 1:
             raise ValueError("count must be at least 1")
+        serials = {self.config.serial(i) for i in range(self.config.count)}
+        unknown = sorted(set(self.config.misbehaviours) - serials)
+        if unknown:
+            raise ValueError(f"misbehaviour for unknown vehicles {unknown}")
         broker = BrokerSettings(
             host=self.config.broker_host,
             port=self.config.broker_port,
@@ -184,10 +198,36 @@ class SimulatedFleet:
         with self.vehicle(serial) as vehicle:
             vehicle.clear_injected_errors(error_type)
 
-    def set_silent(self, serial: str, silent: bool = True) -> None:
-        """Stop (or resume) state/visualization publishing while staying connected."""
+    def set_silent(self, serial: str, silent: bool = True, duration: float | None = None) -> None:
+        """Stop (or resume) state/visualization publishing while staying connected; with
+        ``duration`` (simulated seconds) the vehicle resumes by itself afterwards."""
+        if duration is not None and silent:
+            with self.vehicle(serial) as vehicle:
+                vehicle.saboteur.silence(duration)
+            return
         self._by_serial[serial].silent = silent
+        if not silent:
+            with self.vehicle(serial) as vehicle:
+                vehicle.saboteur.silence(0.0)
+                vehicle.mark_state_due()
 
-    def break_connection(self, serial: str) -> None:
-        """Drop a vehicle's TCP connection: broker sends CONNECTIONBROKEN, paho reconnects."""
-        self._by_serial[serial].break_connection()
+    def break_connection(self, serial: str, duration: float | None = None) -> None:
+        """Drop a vehicle's TCP connection: broker sends CONNECTIONBROKEN, paho reconnects
+        (after ``duration`` simulated seconds, if given) and publishes ONLINE again."""
+        self._by_serial[serial].break_connection(duration)
+
+    def misbehave(
+        self, serial: str, misbehaviour: Misbehaviour | None = None, **changes: Any
+    ) -> Misbehaviour:
+        """Replace a vehicle's scripted misbehaviour; keywords are :class:`Misbehaviour`
+        fields (applied on top of ``misbehaviour``). ``misbehave(serial)`` = behave again.
+        Times count from now."""
+        plan = replace(misbehaviour or Misbehaviour(), **changes)
+        with self.vehicle(serial) as vehicle:
+            vehicle.misbehave(plan)
+        return plan
+
+    def set_operating_mode(self, serial: str, mode: OperatingMode | str) -> None:
+        """Switch a vehicle's operating mode (MANUAL/SERVICE/TEACHIN clear its order)."""
+        with self.vehicle(serial) as vehicle:
+            vehicle.set_operating_mode(OperatingMode(mode))

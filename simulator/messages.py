@@ -28,7 +28,6 @@ from vda5050.enums import (
     ErrorLevel,
     EStop,
     MapStatus,
-    OperatingMode,
     TopicKind,
 )
 from vda5050.headers import HeaderFields
@@ -77,7 +76,7 @@ def _errors(vehicle: VirtualVehicle) -> list[Error]:
         if vehicle.battery <= 0.0
         else []
     )
-    return [*vehicle.order_errors, *vehicle.injected_errors, *battery]
+    return [*vehicle.order_errors, *vehicle.action_errors, *vehicle.injected_errors, *battery]
 
 
 def state_message(vehicle: VirtualVehicle) -> State:
@@ -106,7 +105,7 @@ def state_message(vehicle: VirtualVehicle) -> State:
         paused=vehicle.paused,
         new_base_request=waiting_for_base,
         distance_since_last_node=round(vehicle.distance_since_last_node, 4),
-        operating_mode=OperatingMode.AUTOMATIC,
+        operating_mode=vehicle.operating_mode,
         node_states=[
             NodeState(
                 node_id=s.node.node_id,

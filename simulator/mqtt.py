@@ -9,6 +9,7 @@ exception is logged instead of killing that thread.
 from __future__ import annotations
 
 import logging
+import math
 import socket
 import threading
 import time
@@ -32,6 +33,8 @@ KEEPALIVE_SECONDS = 15
 STOP_TIMEOUT_SECONDS = 3.0
 # A stalled tick loop (debugger, suspended laptop) must not teleport vehicles.
 _MAX_TICK_SECONDS = 1.0
+#: paho's reconnect back-off after an ordinary connection loss, in seconds.
+RECONNECT_DELAY = (1, 30)
 
 
 @dataclass(frozen=True, slots=True)
@@ -97,7 +100,7 @@ class VehicleLink:
         with self.lock:
             will = encode(vehicle.build_connection(ConnectionState.CONNECTIONBROKEN))
         self.client.will_set(self.topic(TopicKind.CONNECTION), will, qos=1, retain=True)
-        self.client.reconnect_delay_set(min_delay=1, max_delay=30)
+        self.client.reconnect_delay_set(*RECONNECT_DELAY)
         self.client.on_connect = _guarded("connect", self._on_connect)
         self.client.on_disconnect = _guarded("disconnect", self._on_disconnect)
         self.client.on_message = _guarded("message", self._on_message)
@@ -129,12 +132,18 @@ class VehicleLink:
         self.client.loop_stop()
         self.connected.clear()
 
-    def break_connection(self) -> None:
+    def break_connection(self, duration: float | None = None) -> None:
         """Fault injection: drop the TCP connection without DISCONNECT.
 
         The broker then publishes the last will (CONNECTIONBROKEN) and paho reconnects on
-        its own, publishing ONLINE again, exactly like a real network outage.
+        its own, publishing ONLINE again, exactly like a real network outage. With
+        ``duration`` (simulated seconds) the first reconnect attempt waits that long
+        (whole wall seconds, at least 1); the usual back-off returns once connected.
         """
+        if duration is not None:
+            wall = max(1, math.ceil(duration / self.vehicle.config.time_scale))
+            self.client.reconnect_delay_set(wall, max(wall, RECONNECT_DELAY[1]))
+        log.info("%s: breaking the connection", self.vehicle.config.serial_number)
         sock = self.client.socket()
         if isinstance(sock, socket.socket):
             sock.shutdown(socket.SHUT_RDWR)
@@ -153,6 +162,7 @@ class VehicleLink:
             return
         # Subscribe before announcing ONLINE: the broker handles packets of one connection
         # in order, so an order sent in reaction to ONLINE cannot be missed.
+        client.reconnect_delay_set(*RECONNECT_DELAY)  # undo a scripted longer outage
         client.subscribe([(topic, 0) for topic in self._inbound])
         with self.lock:
             online = encode(self.vehicle.build_connection(ConnectionState.ONLINE))
@@ -224,16 +234,18 @@ class VehicleLink:
         """Publish a state (and factsheet) now if an event made one due."""
         if not self.client.is_connected():
             return  # keep the flags set: on_connect publishes a fresh state anyway
-        state = factsheet = None
+        states: list[bytes] = []
+        factsheet = None
         with self.lock:
-            if self.vehicle.take_state_due() and not self.silent:
-                state = encode(self.vehicle.build_state())
+            silent = self.silent or self.vehicle.silent
+            if self.vehicle.take_state_due() and not silent:
+                states = [encode(state) for state in self.vehicle.build_states()]
             if self.vehicle.take_factsheet_due():
                 factsheet = encode(self.vehicle.build_factsheet())
         if factsheet is not None:
             self.client.publish(self.topic(TopicKind.FACTSHEET), factsheet, qos=0, retain=True)
-        if state is not None:
-            self._publish_state(state)
+        for payload in states:
+            self._publish_state(payload)
 
     def _publish_state(self, payload: bytes) -> None:
         self._last_state = time.monotonic()
@@ -246,10 +258,14 @@ class VehicleLink:
             self.vehicle.tick(min(dt, _MAX_TICK_SECONDS))
             if now - self._last_state >= cfg.state_interval:
                 self.vehicle.mark_state_due()
+            outage = self.vehicle.saboteur.take_disconnect() if self.connected.is_set() else None
+            silent = self.silent or self.vehicle.silent
+        if outage is not None:
+            self.break_connection(outage)
         self.flush()
         hz = cfg.visualization_hz
         period = 1.0 / hz if hz > 0 else 0.0
-        if hz > 0 and now - self._last_visualization >= period and not self.silent:
+        if hz > 0 and now - self._last_visualization >= period and not silent:
             if not self.client.is_connected():
                 return
             # Keep the cadence on the nominal grid (ticks rarely land exactly on it), but

@@ -1,4 +1,5 @@
-"""Pure state machine of one virtual AGV: orders, driving, actions, battery. No MQTT here.
+"""Pure state machine of one virtual AGV: orders, driving, actions, battery, operating mode
+and scripted misbehaviour (:mod:`simulator.saboteur`). No MQTT here.
 
 Time only advances through :meth:`VirtualVehicle.tick`, so tests drive it with a fake
 clock. Every call that changes what the state message would report raises the "state due"
@@ -7,21 +8,15 @@ flag (REFERENCE §3 F.30); the transport pops it with :meth:`VirtualVehicle.take
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 
-from simulator import messages
+from simulator import intake, messages
 from simulator.execution import ActionExecutor
-from simulator.orders import (
-    OrderRejected,
-    Point,
-    Step,
-    build_steps,
-    check_actions,
-    check_start,
-    check_structure,
-    resolve_targets,
-)
+from simulator.misbehaviour import Misbehaviour
+from simulator.orders import Point, Step
+from simulator.saboteur import Saboteur
 from vda5050 import (
     Connection,
     Error,
@@ -33,8 +28,10 @@ from vda5050 import (
     State,
     Visualization,
 )
-from vda5050.enums import ConnectionState, ErrorLevel, ErrorType
+from vda5050.enums import ConnectionState, ErrorLevel, ErrorType, OperatingMode
 from vda5050.headers import HeaderCounter
+
+log = logging.getLogger(__name__)
 
 _EPS = 1e-6
 # Rejection errors are kept until the next accepted order; cap them so a master that
@@ -59,6 +56,7 @@ class VehicleConfig:
     battery_idle_drain_per_second: float = 0.002
     battery_charge_per_second: float = 1.0
     map_version: str = "1"
+    misbehaviour: Misbehaviour = Misbehaviour()
 
 
 @dataclass(frozen=True, slots=True)
@@ -108,11 +106,15 @@ class VirtualVehicle:
         self.loads: list[Load] = []
         self.order_errors: list[Error] = []
         self.injected_errors: list[Error] = []
+        self.action_errors: list[Error] = []  # failed actions, until the next new order
+        self.fatal_stop: Error | None = None  # halts driving while it is in injected_errors
         self.cancelled = False
+        self.operating_mode = OperatingMode.AUTOMATIC
         self.sim_time = 0.0
         self.actions = ActionExecutor(self)
         self._state_due = True
         self.factsheet_due = True
+        self.saboteur = Saboteur(self, config.misbehaviour)
 
     # ------------------------------------------------------------------ events
     def mark_state_due(self) -> None:
@@ -147,88 +149,17 @@ class VirtualVehicle:
 
     # ------------------------------------------------------------------ orders
     def on_order(self, order: Order) -> bool:
-        """Accept or reject an order/update; returns True if it was accepted."""
-        self.mark_state_due()
-        try:
-            if order.order_id == self.order_id and self.order_id:
-                if order.order_update_id == self.order_update_id:
-                    return False  # resend of what we already run: ignore (REFERENCE §3 B.14)
-                self._accept_update(order)
-            else:
-                self._accept_new(order)
-        except OrderRejected as rejected:
-            self._reject(order, rejected)
-            return False
-        self.order_errors.clear()
-        self.cancelled = False
-        return True
+        """Accept or reject an order/update; returns True if it was accepted now (a
+        dropped, delayed or identically resent order returns False without an error)."""
+        return intake.receive(self, order)
 
     def reject_undecodable(self, reason: str) -> None:
         """An order payload that does not even decode is a validationError too."""
-        self._add_order_error(ErrorType.VALIDATION_ERROR, reason, [])
+        self.add_order_error(ErrorType.VALIDATION_ERROR, reason, [])
         self.mark_state_due()
 
-    def _accept_new(self, order: Order) -> None:
-        if not self.idle:
-            raise OrderRejected(
-                ErrorType.ORDER_ERROR,
-                f"vehicle is busy with order {self.order_id!r}; cancel it or wait until idle",
-            )
-        check_structure(order)
-        if order.nodes[0].sequence_id != 0:
-            raise OrderRejected(ErrorType.VALIDATION_ERROR, "new order must start at sequenceId 0")
-        targets = resolve_targets(order, self.maps, self.known_nodes)
-        check_start(order, targets[0], self.position, self.last_node_id, self.config.start_reach)
-        check_actions(order, skip_first_node=False)
-        self.order_id = order.order_id
-        self.order_update_id = order.order_update_id
-        self.pending = build_steps(order, targets, include_first=True)
-        self.actions.reset_for_new_order(self.pending)
-
-    def _accept_update(self, order: Order) -> None:
-        if order.order_update_id < self.order_update_id:
-            raise OrderRejected(
-                ErrorType.ORDER_UPDATE_ERROR,
-                f"orderUpdateId {order.order_update_id} is older than {self.order_update_id}",
-            )
-        if self.cancelled:
-            raise OrderRejected(
-                ErrorType.ORDER_UPDATE_ERROR, "order was cancelled; send a new orderId"
-            )
-        check_structure(order)
-        targets = resolve_targets(order, self.maps, self.known_nodes)
-        released = [i for i, step in enumerate(self.pending) if step.released]
-        stitch = order.nodes[0]
-        if released:
-            keep = released[-1] + 1
-            expected = self.pending[keep - 1].key
-        else:
-            keep = 0
-            expected = (self.last_node_id, self.last_node_sequence_id)
-        if (stitch.node_id, stitch.sequence_id) != expected:
-            raise OrderRejected(
-                ErrorType.ORDER_UPDATE_ERROR,
-                f"update starts at {stitch.node_id!r}/{stitch.sequence_id}, "
-                f"expected last base node {expected[0]!r}/{expected[1]}",
-            )
-        check_actions(order, skip_first_node=True)
-        # Base is immutable, horizon is replaced; the stitching node keeps its first-sent
-        # content (2.1 §6.6.2), so only the elements after it are appended.
-        dropped = self.pending[keep:]
-        self.pending = self.pending[:keep] + build_steps(order, targets, include_first=False)
-        self.actions.replace_horizon(dropped, self.pending[keep:])
-        self.order_update_id = order.order_update_id
-
-    def _reject(self, order: Order, rejected: OrderRejected) -> None:
-        refs = [
-            ErrorReference(reference_key="orderId", reference_value=order.order_id),
-            ErrorReference(
-                reference_key="orderUpdateId", reference_value=str(order.order_update_id)
-            ),
-        ]
-        self._add_order_error(rejected.error_type, rejected.description, refs)
-
-    def _add_order_error(self, error_type: str, text: str, refs: list[ErrorReference]) -> None:
+    def add_order_error(self, error_type: str, text: str, refs: list[ErrorReference]) -> None:
+        """Report a WARNING order error until the next accepted order (capped list)."""
         error = Error(
             error_type=error_type,
             error_references=refs or None,
@@ -246,7 +177,7 @@ class VirtualVehicle:
 
     def add_no_order_to_cancel(self, action_id: str) -> None:
         """cancelOrder without an active order (REFERENCE §3 D.20)."""
-        self._add_order_error(
+        self.add_order_error(
             ErrorType.NO_ORDER_TO_CANCEL,
             "cancelOrder received but there is no order to cancel",
             [ErrorReference(reference_key="actionId", reference_value=action_id)],
@@ -285,10 +216,56 @@ class VirtualVehicle:
         self.mark_state_due()
 
     def clear_injected_errors(self, error_type: str | None = None) -> None:
-        """Remove injected errors (all, or those of one type)."""
-        self.injected_errors = [
-            e for e in self.injected_errors if error_type is not None and e.error_type != error_type
+        """Remove injected and action errors (all, or those of one type)."""
+
+        def keep(errors: list[Error]) -> list[Error]:
+            return [e for e in errors if error_type is not None and e.error_type != error_type]
+
+        self.injected_errors = keep(self.injected_errors)
+        self.action_errors = keep(self.action_errors)
+        if self.fatal_stop is not None and self.fatal_stop not in self.injected_errors:
+            self.fatal_stop = None
+        self.mark_state_due()
+
+    def misbehave(self, plan: Misbehaviour) -> None:
+        """Replace the scripted misbehaviour (``Misbehaviour()`` = behave again)."""
+        previous = self.saboteur
+        self.saboteur = Saboteur(self, plan)
+        self.saboteur.adopt(previous)
+        self.mark_state_due()
+
+    def report_action_failure(self, action_id: str, action_type: str) -> None:
+        """A scripted action failure: WARNING ``actionFailed`` until the next new order."""
+        refs = [
+            ErrorReference(reference_key="actionId", reference_value=action_id),
+            ErrorReference(reference_key="actionType", reference_value=action_type),
         ]
+        self.action_errors = [
+            *self.action_errors,
+            Error(
+                error_type="actionFailed",
+                error_references=refs,
+                error_description=f"{action_type} failed (simulated misbehaviour)",
+                error_level=ErrorLevel.WARNING,
+            ),
+        ][-_MAX_ORDER_ERRORS:]
+
+    def set_operating_mode(self, mode: OperatingMode) -> None:
+        """Switch mode; entering or leaving MANUAL/SERVICE/TEACHIN clears the order (2.x,
+        REFERENCE §3 I.40): the vehicle stops, order actions fail, node/edge states empty,
+        ids stay, and the next order needs a new orderId."""
+        mode = OperatingMode(mode)
+        if mode == self.operating_mode:
+            return
+        previous, self.operating_mode = self.operating_mode, mode
+        log.info("%s: operating mode %s -> %s", self.config.serial_number, previous, mode)
+        if (previous not in intake.ORDER_MODES or mode not in intake.ORDER_MODES) and (
+            self.has_order
+        ):
+            self.actions.abort_order(f"order cleared: operating mode {mode}")
+            self.pending = []
+            self.cancelled = True
+            self.driving, self.speed_now = False, 0.0
         self.mark_state_due()
 
     # ------------------------------------------------------------------ simulation
@@ -297,9 +274,14 @@ class VirtualVehicle:
         sim_dt = max(0.0, dt) * self.config.time_scale
         self.sim_time += sim_dt
         was_driving = self.driving
+        self.saboteur.advance()
+        for order in self.saboteur.due_orders():
+            intake.process(self, order)
         if not self.paused:
             self.actions.advance(sim_dt)
         moved = self._drive(sim_dt)
+        if self.saboteur.fatal_due():
+            self._stop_fatally()
         self._update_battery(sim_dt, moved)
         self.actions.check_cancel_done()
         if self.driving != was_driving:
@@ -312,7 +294,19 @@ class VirtualVehicle:
             and not self.paused
             and not self.actions.blocks_driving
             and self.battery > 0.0
+            and self.fatal_stop is None
         )
+
+    def _stop_fatally(self) -> None:
+        error = Error(
+            error_type=self.saboteur.plan.fatal_error,
+            error_description="simulated FATAL error while driving; clear it to go on",
+            error_level=ErrorLevel.FATAL,
+        )
+        self.injected_errors.append(error)
+        self.fatal_stop = error
+        self.driving, self.speed_now = False, 0.0
+        self.mark_state_due()
 
     def _drive(self, sim_dt: float) -> float:
         """Move towards the next node; returns metres driven."""
@@ -352,6 +346,7 @@ class VirtualVehicle:
         self.last_node_id, self.last_node_sequence_id = step.key
         self.distance_since_last_node = 0.0
         self.actions.trigger_node(step.key)
+        self.saboteur.node_passed()
         self.mark_state_due()
 
     def _update_battery(self, sim_dt: float, metres: float) -> None:
@@ -370,6 +365,16 @@ class VirtualVehicle:
     def build_state(self) -> State:
         """Assemble a state message; consumes one state headerId."""
         return messages.state_message(self)
+
+    def build_states(self) -> list[State]:
+        """The state messages to publish now: one, or what the misbehaviour makes of it
+        (none while held back, two when duplicated or when a held one follows)."""
+        return self.saboteur.shape_states(messages.state_message(self))
+
+    @property
+    def silent(self) -> bool:
+        """True while a scripted silence lasts (no state, no visualization)."""
+        return self.saboteur.silent
 
     def build_visualization(self) -> Visualization:
         """Assemble a visualization message; consumes one visualization headerId."""

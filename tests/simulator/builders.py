@@ -42,9 +42,7 @@ LAYOUT_DICT = {
 }
 
 
-def make_vehicle(
-    start: str = "n1", version: str = "2.0.0", **config: float | str
-) -> VirtualVehicle:
+def make_vehicle(start: str = "n1", version: str = "2.0.0", **config: object) -> VirtualVehicle:
     """A vehicle standing on ``start`` of the demo map."""
     x, y = POS[start]
     cfg = VehicleConfig(version=version, **config)  # type: ignore[arg-type]

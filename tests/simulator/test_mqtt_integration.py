@@ -9,120 +9,19 @@ from __future__ import annotations
 import json
 import os
 import signal
-import socket
 import subprocess
 import sys
-import threading
-import time
-import uuid
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
-
-import paho.mqtt.client as mqtt
-import pytest
-from paho.mqtt.enums import CallbackAPIVersion
 
 from simulator import FleetConfig, Layout, SimulatedFleet
 from tests.simulator.builders import LAYOUT_DICT, action, instant, make_order
+from tests.simulator.recorder import HOST, PORT, Recorder, connection, needs_broker
 from vda5050 import encode
 from vda5050.enums import ErrorLevel
 
-HOST, PORT = "127.0.0.1", 1883
 ROOT = Path(__file__).resolve().parents[2]
 
-
-def _broker_up() -> bool:
-    try:
-        with socket.create_connection((HOST, PORT), timeout=1.0):
-            return True
-    except OSError:
-        return False
-
-
-pytestmark = pytest.mark.skipif(not _broker_up(), reason="no MQTT broker on 127.0.0.1:1883")
-
-
-@dataclass
-class Received:
-    """One message seen by the recorder."""
-
-    topic: str
-    data: dict[str, Any]
-    retain: bool
-
-    @property
-    def serial(self) -> str:
-        return self.topic.split("/")[3]
-
-    @property
-    def kind(self) -> str:
-        return self.topic.split("/")[4]
-
-
-class Recorder:
-    """A master-control-like subscriber that records everything under one interface."""
-
-    def __init__(self, interface: str) -> None:
-        self.interface = interface
-        self.messages: list[Received] = []
-        self._cond = threading.Condition()
-        self.client = mqtt.Client(CallbackAPIVersion.VERSION2, client_id=f"rec-{uuid.uuid4()}")
-        self.client.on_message = self._on_message
-        self.client.connect(HOST, PORT, 15)
-        self.client.loop_start()
-
-    def subscribe(self) -> None:
-        info = self.client.subscribe(f"{self.interface}/v2/+/+/#", qos=1)
-        assert info[0] == mqtt.MQTT_ERR_SUCCESS
-
-    def _on_message(self, _c: mqtt.Client, _u: object, msg: mqtt.MQTTMessage) -> None:
-        if not msg.payload:
-            return  # our own retained-message cleanup
-        with self._cond:
-            self.messages.append(Received(msg.topic, json.loads(msg.payload), bool(msg.retain)))
-            self._cond.notify_all()
-
-    def wait_for(self, predicate: Callable[[Received], bool], timeout: float = 10.0) -> Received:
-        deadline = time.monotonic() + timeout
-        with self._cond:
-            while True:
-                for message in self.messages:
-                    if predicate(message):
-                        return message
-                remaining = deadline - time.monotonic()
-                if remaining <= 0:
-                    kinds = [(m.serial, m.kind) for m in self.messages[-10:]]
-                    raise AssertionError(f"no matching message within {timeout} s; last: {kinds}")
-                self._cond.wait(remaining)
-
-    def publish(self, serial: str, kind: str, payload: bytes) -> None:
-        self.client.publish(f"{self.interface}/v2/sim/{serial}/{kind}", payload, qos=0)
-
-    def close(self, serials: list[str]) -> None:
-        # Clear the retained connection/factsheet messages this test left on the broker.
-        for serial in serials:
-            for kind in ("connection", "factsheet"):
-                info = self.client.publish(
-                    f"{self.interface}/v2/sim/{serial}/{kind}", b"", qos=1, retain=True
-                )
-                info.wait_for_publish(5)
-        self.client.disconnect()
-        self.client.loop_stop()
-
-
-@pytest.fixture
-def recorder() -> Iterator[Recorder]:
-    rec = Recorder(f"simtest{uuid.uuid4().hex[:10]}")
-    yield rec
-    rec.close(["AGV-1", "AGV-2"])
-
-
-def _connection(serial: str, state: str) -> Callable[[Received], bool]:
-    return lambda m: (
-        m.serial == serial and m.kind == "connection" and m.data["connectionState"] == state
-    )
+pytestmark = needs_broker
 
 
 def test_fleet_end_to_end(recorder: Recorder) -> None:
@@ -135,7 +34,7 @@ def test_fleet_end_to_end(recorder: Recorder) -> None:
         assert fleet.wait_connected(10.0)
         recorder.subscribe()  # after connecting: factsheet and ONLINE must come retained
         for serial in ("AGV-1", "AGV-2"):
-            online = recorder.wait_for(_connection(serial, "ONLINE"))
+            online = recorder.wait_for(connection(serial, "ONLINE"))
             assert online.retain
             sheet = recorder.wait_for(lambda m, s=serial: m.serial == s and m.kind == "factsheet")
             assert sheet.retain
@@ -199,7 +98,7 @@ def test_fleet_end_to_end(recorder: Recorder) -> None:
     finally:
         fleet.stop()
     for serial in ("AGV-1", "AGV-2"):
-        recorder.wait_for(_connection(serial, "OFFLINE"))
+        recorder.wait_for(connection(serial, "OFFLINE"))
 
 
 def test_broken_connection_sends_last_will_and_reconnects(recorder: Recorder) -> None:
@@ -208,16 +107,16 @@ def test_broken_connection_sends_last_will_and_reconnects(recorder: Recorder) ->
     recorder.subscribe()
     fleet.start()
     try:
-        first = recorder.wait_for(_connection("AGV-1", "ONLINE"))
+        first = recorder.wait_for(connection("AGV-1", "ONLINE"))
         fleet.break_connection("AGV-1")
-        recorder.wait_for(_connection("AGV-1", "CONNECTIONBROKEN"))
+        recorder.wait_for(connection("AGV-1", "CONNECTIONBROKEN"))
         again = recorder.wait_for(
-            lambda m: _connection("AGV-1", "ONLINE")(m) and m is not first, timeout=15.0
+            lambda m: connection("AGV-1", "ONLINE")(m) and m is not first, timeout=15.0
         )
         assert again.data["headerId"] > first.data["headerId"]
     finally:
         fleet.stop()
-    recorder.wait_for(_connection("AGV-1", "OFFLINE"))
+    recorder.wait_for(connection("AGV-1", "OFFLINE"))
 
 
 def test_cli_stops_cleanly_on_sigterm(recorder: Recorder, tmp_path: Path) -> None:
@@ -245,7 +144,7 @@ def test_cli_stops_cleanly_on_sigterm(recorder: Recorder, tmp_path: Path) -> Non
     )
     try:
         for serial in ("AGV-1", "AGV-2"):
-            recorder.wait_for(_connection(serial, "ONLINE"), timeout=15.0)
+            recorder.wait_for(connection(serial, "ONLINE"), timeout=15.0)
         proc.send_signal(signal.SIGTERM)
         output, _ = proc.communicate(timeout=15)
     finally:
@@ -254,6 +153,6 @@ def test_cli_stops_cleanly_on_sigterm(recorder: Recorder, tmp_path: Path) -> Non
             proc.wait()
     assert proc.returncode == 0, output.decode(errors="replace")
     for serial in ("AGV-1", "AGV-2"):
-        recorder.wait_for(_connection(serial, "OFFLINE"))
+        recorder.wait_for(connection(serial, "OFFLINE"))
     broken = [m for m in recorder.messages if m.data.get("connectionState") == "CONNECTIONBROKEN"]
     assert broken == []

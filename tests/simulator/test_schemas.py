@@ -12,6 +12,7 @@ from typing import Any
 import jsonschema
 import pytest
 
+from simulator import Misbehaviour
 from tests.simulator.builders import (
     action,
     finished,
@@ -22,7 +23,7 @@ from tests.simulator.builders import (
     run_until,
 )
 from vda5050 import State, decode, encode
-from vda5050.enums import BlockingType, ConnectionState, ErrorLevel, TopicKind
+from vda5050.enums import BlockingType, ConnectionState, ErrorLevel, OperatingMode, TopicKind
 
 SCHEMAS = Path("/work/shared/vda5050/schemas")
 VERSIONS = ["2.0.0", "2.1.0"]
@@ -154,3 +155,40 @@ def test_validator_is_not_vacuous() -> None:
     state["operatingMode"] = "FLYING"
     problems = list(validator("2.0.0", "state").iter_errors(state))
     assert len(problems) == 2
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+def test_misbehaving_vehicle_messages_validate(version: str) -> None:
+    plan = Misbehaviour(
+        reject_orders="vendorRefusal",
+        reject_count=1,
+        stale_states=1.0,
+        duplicate_states=1.0,
+        fail_actions=("pick",),
+        fatal_after_nodes=2,
+        mode=OperatingMode.SERVICE,
+        mode_at=30.0,
+    )
+    vehicle = make_vehicle(version=version, misbehaviour=plan)
+    states = vehicle.build_states()
+    vehicle.on_order(make_order("refused", ["n1", "n2"]))
+    states += vehicle.build_states()
+    vehicle.on_order(make_order("o1", ["n1", "n2", "n3"], actions={"n2": [action("pick", "p1")]}))
+    vehicle.on_instant_actions(instant(action("logReport", "l1", reason="test")))
+    for _ in range(400):
+        vehicle.tick(0.1)
+        if vehicle.take_state_due():
+            states += vehicle.build_states()
+    payloads = [encode(s) for s in states]
+    for payload in payloads:
+        _assert_valid(version, TopicKind.STATE, payload)
+    decoded = [json.loads(p) for p in payloads]
+    errors = {(e["errorType"], e["errorLevel"]) for s in decoded for e in s["errors"]}
+    assert errors >= {
+        ("vendorRefusal", "WARNING"),
+        ("actionFailed", "WARNING"),
+        ("simulatedFatalError", "FATAL"),
+    }
+    assert decoded[-1]["operatingMode"] == "SERVICE"
+    factsheet = encode(vehicle.build_factsheet())
+    _assert_valid(version, TopicKind.FACTSHEET, factsheet)
