@@ -91,3 +91,28 @@ def test_cancel_then_next_order_then_freeze_and_resume(
     assert sorted(set(sniffer.order_ids())) == [f"TO-{first.pk}", f"TO-{second.pk}"]
     updates = [m["orderUpdateId"] for m in sniffer.messages if m["orderId"] == f"TO-{second.pk}"]
     assert updates == sorted(updates)
+
+
+def test_a_rejected_order_fails_with_the_vehicle_reason_and_the_next_one_runs(
+    fleet_env: dict[str, str], tmp_path: Path, stop_all: list[Process]
+) -> None:
+    layout = create_layout(spec=warehouse_layout(columns=6, rows=4))
+    stop_all.extend(
+        start_fleet(
+            fleet_env,
+            tmp_path,
+            layout,
+            vehicles=1,
+            extra=("--misbehave", "AGV-1:reject_orders=orderError,reject_count=1"),
+        )
+    )
+    wait_until(lambda: Vehicle.objects.filter(connection="ONLINE").exists(), 60, "online", stop_all)
+    pick = Station.objects.get(map=layout, station_id="PICK-2")
+    drop = Station.objects.get(map=layout, station_id="DROP-1")
+
+    rejected = create_transport_order(source=pick, destination=drop)
+    wait_until(lambda: status(rejected) == "FAILED", 60, "rejected order failed", stop_all)
+    accepted = create_transport_order(source=pick, destination=drop)
+    wait_until(lambda: status(accepted) == "FINISHED", 90, "next order finished", stop_all)
+
+    assert rejected.failure_reason.startswith("rejected by vehicle: orderError")
