@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint format venv browser clean bench-ingest
+.PHONY: demo test lint format venv browser clean bench-ingest bench-dispatch bench-routing
 
 $(STAMP): requirements.txt requirements-dev.txt
 	@command -v $(PYTHON) >/dev/null || { echo "Python 3.11 is required ($(PYTHON) not found)"; exit 1; }
@@ -38,6 +38,12 @@ lint: $(STAMP)
 
 bench-ingest: $(STAMP)  ## control's in-process cost per state message (bench/results/ingest.json)
 	$(PY) -m bench.ingest $(BENCH_ARGS)
+
+bench-routing: $(STAMP)  ## LIF import of a 5,000-node site and route times (bench/results/routing.json)
+	$(PY) -m bench.routing $(BENCH_ARGS)
+
+bench-dispatch: $(STAMP)  ## one dispatch cycle, batch assignment vs greedy (bench/results/dispatch.json)
+	$(PY) -m bench.dispatch $(BENCH_ARGS)
 
 format: $(STAMP)
 	$(VENV)/bin/ruff format .

@@ -1,34 +1,222 @@
-"""Admin for layouts."""
+"""Admin for sites, maps, LIF imports and layouts, vehicle types, nodes, edges and stations.
 
-from django.contrib import admin
+Every change of the graph made here goes through `maps.services.mark_layout_changed`, so routing
+caches see it.
+"""
 
-from maps.models import Edge, Map, Node, Station
+import json
+from collections.abc import Iterable
+from typing import Any
+
+from django import forms
+from django.contrib import admin, messages
+from django.db.models import Model, QuerySet
+from django.http import HttpRequest, HttpResponse, HttpResponseRedirect
+from django.template.response import TemplateResponse
+from django.urls import URLPattern, path, reverse
+
+from maps.lif.export import export_lif
+from maps.models import (
+    Edge,
+    EdgeProperty,
+    Layout,
+    LifImport,
+    Map,
+    Node,
+    NodeProperty,
+    Site,
+    Station,
+    StationNode,
+    VehicleType,
+)
+from maps.selectors import validate_layout
+from maps.services import import_lif, mark_layout_changed
+
+MAX_FINDING_MESSAGES = 20
+
+
+class LayoutChangeAdmin(admin.ModelAdmin[Any]):
+    """Marks the map of every saved or deleted row as changed (for routing caches)."""
+
+    def maps_of(self, objects: Iterable[Model]) -> list[Map]:
+        return [obj.map for obj in objects if getattr(obj, "map_id", None)]  # type: ignore[attr-defined]
+
+    def save_related(self, request: HttpRequest, form: Any, formsets: Any, change: bool) -> None:
+        super().save_related(request, form, formsets, change)
+        mark_layout_changed(maps=self.maps_of([form.instance]))
+
+    def delete_model(self, request: HttpRequest, obj: Any) -> None:
+        maps = self.maps_of([obj])
+        super().delete_model(request, obj)
+        mark_layout_changed(maps=maps)
+
+    def delete_queryset(self, request: HttpRequest, queryset: QuerySet[Any]) -> None:
+        maps = self.maps_of(queryset)
+        super().delete_queryset(request, queryset)
+        mark_layout_changed(maps=maps)
+
+
+class MapInline(admin.TabularInline[Map, Site]):
+    model = Map
+    fields = ["map_id", "name", "level"]
+    show_change_link = True
+    extra = 0
+
+
+@admin.register(Site)
+class SiteAdmin(admin.ModelAdmin[Site]):
+    list_display = ["site_id", "name"]
+    search_fields = ["site_id", "name"]
+    inlines = [MapInline]
 
 
 @admin.register(Map)
 class MapAdmin(admin.ModelAdmin[Map]):
-    list_display = ["map_id", "name", "updated_at"]
+    list_display = ["map_id", "name", "site", "level", "revision", "updated_at"]
+    list_filter = ["site"]
     search_fields = ["map_id", "name"]
+    readonly_fields = ["revision", "lif_import", "source_id"]
+    actions = ["validate", "export"]
+    fieldsets = [
+        (None, {"fields": ["map_id", "name", "description", "site", "level"]}),
+        (
+            "Floor plan",
+            {
+                "fields": [
+                    "floor_plan",
+                    "floor_plan_scale",
+                    "floor_plan_origin_x",
+                    "floor_plan_origin_y",
+                    "floor_plan_rotation",
+                ]
+            },
+        ),
+        ("Origin", {"fields": ["lif_import", "source_id", "revision"]}),
+    ]
+
+    @admin.action(description="Validate the selected maps")
+    def validate(self, request: HttpRequest, queryset: QuerySet[Map]) -> None:
+        for layout in queryset:
+            findings = validate_layout(map=layout)
+            errors = sum(f.severity == "error" for f in findings)
+            level = messages.ERROR if errors else messages.SUCCESS
+            summary = f"{layout.map_id}: {errors} error(s), {len(findings) - errors} warning(s)"
+            self.message_user(request, summary, level)
+            for finding in findings[:MAX_FINDING_MESSAGES]:
+                severe = finding.severity == "error"
+                self.message_user(
+                    request, str(finding), messages.ERROR if severe else messages.WARNING
+                )
+
+    @admin.action(description="Export the selected maps as a LIF file")
+    def export(self, request: HttpRequest, queryset: QuerySet[Map]) -> HttpResponse:
+        maps = list(queryset.select_related("site", "lif_import"))
+        name = maps[0].map_id if len(maps) == 1 else "layout"
+        response = HttpResponse(
+            json.dumps(export_lif(maps=maps), indent=2), content_type="application/json"
+        )
+        response["Content-Disposition"] = f'attachment; filename="{name}.lif.json"'
+        return response
+
+
+class LifUploadForm(forms.Form):
+    """The admin's LIF upload: the file, the site it goes to, whether to replace."""
+
+    file = forms.FileField(help_text="a LIF 1.0 JSON file")
+    site = forms.CharField(max_length=100, initial="default", help_text="created if missing")
+    replace = forms.BooleanField(
+        required=False, help_text="replace an earlier import of the same project"
+    )
+
+
+@admin.register(LifImport)
+class LifImportAdmin(admin.ModelAdmin[LifImport]):
+    list_display = ["project", "site", "lif_version", "prefix", "file_name", "imported_at"]
+    list_filter = ["site"]
+    readonly_fields = [f.name for f in LifImport._meta.fields]
+
+    def get_urls(self) -> list[URLPattern]:
+        upload = path("upload/", self.admin_site.admin_view(self.upload), name="maps_lif_upload")
+        return [upload, *super().get_urls()]
+
+    def add_view(self, request: HttpRequest, *args: Any, **kwargs: Any) -> HttpResponse:
+        return HttpResponseRedirect(reverse("admin:maps_lif_upload"))
+
+    def upload(self, request: HttpRequest) -> HttpResponse:
+        """Upload a LIF file; shows the import report (every problem when nothing was written)."""
+        if not self.has_add_permission(request):
+            return HttpResponseRedirect(reverse("admin:index"))
+        form = LifUploadForm(request.POST or None, request.FILES or None)
+        report = None
+        if request.method == "POST" and form.is_valid():
+            upload = form.cleaned_data["file"]
+            report = import_lif(
+                source=upload.read(),
+                site_id=form.cleaned_data["site"],
+                replace=form.cleaned_data["replace"],
+                file_name=upload.name or "",
+            )
+        context = {
+            **self.admin_site.each_context(request),
+            "opts": self.model._meta,
+            "title": "Import a LIF file",
+            "form": form,
+            "report": report,
+        }
+        return TemplateResponse(request, "admin/maps/lifimport/upload.html", context)
+
+
+@admin.register(Layout)
+class LayoutAdmin(admin.ModelAdmin[Layout]):
+    list_display = ["layout_id", "name", "site", "version", "level_id", "lif_import"]
+    list_filter = ["site"]
+    search_fields = ["layout_id", "name"]
+
+
+@admin.register(VehicleType)
+class VehicleTypeAdmin(admin.ModelAdmin[VehicleType]):
+    list_display = ["type_id", "name", "max_speed", "rotation_speed", "height"]
+    search_fields = ["type_id", "name", "manufacturer", "series_name"]
+
+
+class NodePropertyInline(admin.TabularInline[NodeProperty, Node]):
+    model = NodeProperty
+    extra = 0
 
 
 @admin.register(Node)
-class NodeAdmin(admin.ModelAdmin[Node]):
-    list_display = ["node_id", "map", "x", "y", "theta"]
+class NodeAdmin(LayoutChangeAdmin):
+    list_display = ["node_id", "map", "x", "y", "theta", "layout"]
     list_filter = ["map"]
-    search_fields = ["node_id"]
+    search_fields = ["node_id", "name"]
+    raw_id_fields = ["layout"]
+    inlines = [NodePropertyInline]
+
+
+class EdgePropertyInline(admin.StackedInline[EdgeProperty, Edge]):
+    model = EdgeProperty
+    extra = 0
 
 
 @admin.register(Edge)
-class EdgeAdmin(admin.ModelAdmin[Edge]):
+class EdgeAdmin(LayoutChangeAdmin):
     list_display = ["edge_id", "map", "start", "end", "length", "max_speed"]
     list_filter = ["map"]
-    search_fields = ["edge_id"]
-    raw_id_fields = ["start", "end"]
+    search_fields = ["edge_id", "name"]
+    raw_id_fields = ["start", "end", "layout"]
+    inlines = [EdgePropertyInline]
+
+
+class StationNodeInline(admin.TabularInline[StationNode, Station]):
+    model = StationNode
+    raw_id_fields = ["node"]
+    extra = 0
 
 
 @admin.register(Station)
-class StationAdmin(admin.ModelAdmin[Station]):
+class StationAdmin(LayoutChangeAdmin):
     list_display = ["station_id", "name", "kind", "map", "node"]
     list_filter = ["map", "kind"]
     search_fields = ["station_id", "name"]
-    raw_id_fields = ["node"]
+    raw_id_fields = ["node", "layout"]
+    inlines = [StationNodeInline]

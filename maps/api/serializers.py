@@ -1,8 +1,8 @@
-"""Serializers of layouts (read-only reference data)."""
+"""Serializers of layouts (read-only reference data) and of the LIF import input."""
 
 from rest_framework import serializers
 
-from maps.models import Map, Station
+from maps.models import Map, Site, Station
 
 
 class StationSerializer(serializers.ModelSerializer[Station]):
@@ -15,6 +15,23 @@ class StationSerializer(serializers.ModelSerializer[Station]):
 
 
 class MapSerializer(serializers.ModelSerializer[Map]):
+    site = serializers.CharField(source="site.site_id", read_only=True, default=None)
+
     class Meta:
         model = Map
-        fields = ["id", "map_id", "name", "description", "updated_at"]
+        fields = ["id", "map_id", "name", "description", "site", "level", "revision", "updated_at"]
+
+
+class SiteSerializer(serializers.ModelSerializer[Site]):
+    maps = serializers.SlugRelatedField[Map](many=True, read_only=True, slug_field="map_id")
+
+    class Meta:
+        model = Site
+        fields = ["id", "site_id", "name", "description", "maps"]
+
+
+class LifImportInputSerializer(serializers.Serializer[None]):
+    """Where an uploaded LIF file goes (query string or form fields)."""
+
+    site = serializers.CharField(max_length=100, default="default")
+    replace = serializers.BooleanField(default=False)

@@ -1,19 +1,28 @@
-"""Read-only API of maps and stations."""
+"""API of maps, sites and stations: read-only data, LIF import and export, validation."""
 
 from typing import Any
 
-from rest_framework import viewsets
+from rest_framework import status, viewsets
 from rest_framework.decorators import action
+from rest_framework.parsers import JSONParser, MultiPartParser
+from rest_framework.permissions import IsAdminUser
 from rest_framework.request import Request
 from rest_framework.response import Response
+from rest_framework.views import APIView
 
-from maps.api.serializers import MapSerializer, StationSerializer
-from maps.models import Map, Station
-from maps.selectors import layout_as_dict
+from maps.api.serializers import (
+    LifImportInputSerializer,
+    MapSerializer,
+    SiteSerializer,
+    StationSerializer,
+)
+from maps.models import Map, Site, Station
+from maps.selectors import export_map_lif, export_site_lif, layout_as_dict, validate_layout
+from maps.services import import_lif
 
 
 class MapViewSet(viewsets.ReadOnlyModelViewSet[Map]):
-    queryset = Map.objects.all()
+    queryset = Map.objects.select_related("site")
     serializer_class = MapSerializer
 
     @action(detail=True)
@@ -21,7 +30,75 @@ class MapViewSet(viewsets.ReadOnlyModelViewSet[Map]):
         """Nodes, edges and stations of the map as plain data."""
         return Response(layout_as_dict(map=self.get_object()))
 
+    @action(detail=True)
+    def lif(self, request: Request, *args: Any, **kwargs: Any) -> Response:
+        """The map as a LIF 1.0 file."""
+        layout = self.get_object()
+        return _attachment(export_map_lif(map=layout), f"{layout.map_id}.lif.json")
+
+    @action(detail=True)
+    def validation(self, request: Request, *args: Any, **kwargs: Any) -> Response:
+        """The map's validation findings, errors first."""
+        layout = self.get_object()
+        findings = validate_layout(map=layout)
+        return Response(
+            {
+                "map": layout.map_id,
+                "errors": sum(f.severity == "error" for f in findings),
+                "warnings": sum(f.severity == "warning" for f in findings),
+                "findings": [f.as_dict() for f in findings],
+            }
+        )
+
+
+class SiteViewSet(viewsets.ReadOnlyModelViewSet[Site]):
+    queryset = Site.objects.prefetch_related("maps")
+    serializer_class = SiteSerializer
+
+    @action(detail=True)
+    def lif(self, request: Request, *args: Any, **kwargs: Any) -> Response:
+        """Every map of the site as one LIF 1.0 file."""
+        site = self.get_object()
+        return _attachment(export_site_lif(site=site), f"{site.site_id}.lif.json")
+
 
 class StationViewSet(viewsets.ReadOnlyModelViewSet[Station]):
     queryset = Station.objects.select_related("map", "node")
     serializer_class = StationSerializer
+
+
+class LifImportApi(APIView):
+    """POST a LIF file (multipart field `file`, or the JSON itself as the body); staff only.
+
+    `site` and `replace` come from the query string or form fields. 201 with the import report,
+    or 422 with the report of every problem (nothing written).
+    """
+
+    permission_classes = [IsAdminUser]
+    parser_classes = [MultiPartParser, JSONParser]
+
+    def post(self, request: Request) -> Response:
+        params = LifImportInputSerializer(data={**request.query_params.dict(), **_form(request)})
+        params.is_valid(raise_exception=True)
+        upload = request.FILES.get("file")
+        source = upload.read() if upload is not None else request.data
+        report = import_lif(
+            source=source,
+            site_id=params.validated_data["site"],
+            replace=params.validated_data["replace"],
+            file_name=upload.name if upload is not None and upload.name else "",
+        )
+        code = status.HTTP_201_CREATED if report.ok else status.HTTP_422_UNPROCESSABLE_ENTITY
+        return Response(report.as_dict(), status=code)
+
+
+def _form(request: Request) -> dict[str, Any]:
+    if request.FILES or request.content_type.startswith("multipart/"):
+        return {k: request.data[k] for k in ("site", "replace") if k in request.data}
+    return {}
+
+
+def _attachment(document: dict[str, Any], file_name: str) -> Response:
+    response = Response(document)
+    response["Content-Disposition"] = f'attachment; filename="{file_name}"'
+    return response

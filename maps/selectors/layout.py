@@ -1,22 +1,9 @@
-"""Reads of layouts: the routing graph and the layout as plain data for pages and the simulator."""
+"""Reads of layouts as plain data: for pages, the simulator and LIF export."""
 
 from typing import Any
 
-from maps.models import Edge, Map, Node, Station
-from traffic import RoutingGraph
-from traffic.routing import GraphEdge
-
-
-def load_graph(*, map: Map) -> RoutingGraph:
-    """The routing graph of `map` (node ids as keys, edge lengths as weights)."""
-    node_ids = list(Node.objects.filter(map=map).values_list("node_id", flat=True))
-    edges = [
-        GraphEdge(edge_id=edge_id, start=start, end=end, length=length)
-        for edge_id, start, end, length in Edge.objects.filter(map=map).values_list(
-            "edge_id", "start__node_id", "end__node_id", "length"
-        )
-    ]
-    return RoutingGraph(node_ids, edges)
+from maps.lif.export import export_lif
+from maps.models import Edge, Map, Node, Site, Station
 
 
 def get_default_map() -> Map | None:
@@ -54,3 +41,13 @@ def layout_as_dict(*, map: Map) -> dict[str, Any]:
         "stations": stations,
         "parking": parking,
     }
+
+
+def export_map_lif(*, map: Map) -> dict[str, Any]:
+    """One map as a LIF 1.0 document (edges to other floors left out)."""
+    return export_lif(maps=[map])
+
+
+def export_site_lif(*, site: Site) -> dict[str, Any]:
+    """Every map of a site as one LIF 1.0 document, transitions between floors included."""
+    return export_lif(maps=list(Map.objects.filter(site=site).select_related("lif_import", "site")))
