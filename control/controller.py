@@ -37,6 +37,13 @@ _VEHICLE_COMMANDS: dict[str, tuple[str, dict[str, Any]]] = {
 }
 
 
+# Commands control knows but cannot carry out yet: refused with the reason, never dropped.
+_NOT_YET = {
+    "vehicle.charge": "sending a vehicle to a charger is not supported yet (issue 7)",
+    "vehicle.park": "sending a vehicle to a parking station is not supported yet (issue 7)",
+}
+
+
 class Controller:
     """The live fleet and everything `control` decides; MQTT and the database are injected."""
 
@@ -189,14 +196,30 @@ class Controller:
         action_type, parameters = _VEHICLE_COMMANDS.get(kind, (None, {}))
         if kind == "vehicle.instant_action":
             action_type, parameters = command.get("action_type"), command.get("parameters") or {}
+        request = command.get("command", command.get("request"))
         with self.lock:
             vehicle = self.fleet.by_pk(command.get("vehicle", -1))
+            if vehicle is not None and kind in _NOT_YET:
+                self.counters["refused_actions"] += 1
+                vehicle.track(
+                    InstantActionTrack(
+                        f"refused-{uuid.uuid4()}",
+                        kind,
+                        "REFUSED",
+                        reason=_NOT_YET[kind],
+                        request=None if request is None else str(request),
+                    )
+                )
+                return
             if vehicle is None or not isinstance(action_type, str):
                 self.counters["bad_commands"] += 1
                 logger.warning("ignored command %r: unknown vehicle or kind", command)
                 return
             self.request_instant_action(
-                vehicle, action_type, parameters, request=command.get("request")
+                vehicle,
+                action_type,
+                parameters,
+                request=None if request is None else str(request),
             )
 
     def request_instant_action(

@@ -635,3 +635,17 @@ def test_B12_new_base_request_releases_more_at_once(stepwise, sent) -> None:
 
     first, update = orders_in(sent)
     assert released(update) == [("b", 2, True), ("c", 4, True), ("d", 6, False)]
+
+
+def test_commands_control_cannot_carry_out_yet_are_refused_with_the_reason(
+    controller, sent
+) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    sent.clear()
+
+    controller.execute({"kind": "vehicle.charge", "vehicle": 1, "command": 5, "station": "C-1"})
+
+    (track,) = controller.fleet.by_pk(1).instant_actions.values()
+    assert (track.status, track.request) == ("REFUSED", "5")
+    assert "not supported yet" in track.reason
+    assert sent == []
