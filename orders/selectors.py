@@ -1,31 +1,178 @@
-"""Reads for dispatch and control."""
+"""Reads for dispatch, control, the API and webhooks."""
 
-from django.db.models import QuerySet
+from collections import Counter
+from dataclasses import dataclass, field
+from datetime import datetime, timedelta
+from typing import Any
 
-from orders.models import TransportOrder
+from django.db.models import F, Max, Q, QuerySet
+
+from orders.models import TransportOrder, VehicleCommand, WebhookDelivery, WebhookSubscription
 from robots.models import Vehicle
+
+Status = TransportOrder.Status
 
 
 def list_pending_orders() -> QuerySet[TransportOrder]:
-    """Orders waiting for a vehicle, most urgent first."""
+    """Orders waiting for a vehicle, most urgent first (priority, deadline, age)."""
     return (
-        TransportOrder.objects.filter(status=TransportOrder.Status.NEW, cancel_requested=False)
+        TransportOrder.objects.filter(status=Status.NEW, cancel_requested=False)
         .select_related("source__node", "source__map", "destination__node")
-        .order_by("-priority", "created_at", "pk")
+        .order_by("-priority", F("deadline").asc(nulls_last=True), "created_at", "pk")
     )
 
 
 def list_idle_vehicles() -> list[Vehicle]:
     """Vehicles dispatch may give work now: available and without an active transport order."""
-    busy = TransportOrder.objects.filter(
-        status__in=TransportOrder.ACTIVE_STATUSES, vehicle__isnull=False
-    ).values("vehicle_id")
-    candidates = Vehicle.objects.filter(connection=Vehicle.Connection.ONLINE).exclude(pk__in=busy)
-    return [vehicle for vehicle in candidates if vehicle.is_available]
+    return get_dispatch_fleet().idle
+
+
+@dataclass
+class DispatchFleet:
+    """The vehicles as dispatch sees them: the idle ones, and counts that explain the others."""
+
+    idle: list[Vehicle] = field(default_factory=list)
+    online: int = 0
+    busy: int = 0
+    unavailable: Counter[str] = field(default_factory=Counter)
+
+
+def get_dispatch_fleet(*, held_since: datetime | None = None) -> DispatchFleet:
+    """Online vehicles split into idle (available, no active order), busy and unavailable (with
+    the reason: paused, in error, manual mode, no position, or told to pause, charge or park by
+    a command since `held_since`)."""
+    busy = set(
+        TransportOrder.objects.filter(
+            status__in=TransportOrder.ACTIVE_STATUSES, vehicle__isnull=False
+        ).values_list("vehicle_id", flat=True)
+    )
+    held = list_held_vehicles(since=held_since) if held_since else {}
+    fleet = DispatchFleet()
+    for vehicle in Vehicle.objects.filter(connection=Vehicle.Connection.ONLINE):
+        fleet.online += 1
+        if not vehicle.is_available:
+            fleet.unavailable[_unavailable_reason(vehicle)] += 1
+        elif vehicle.pk in held:
+            fleet.unavailable[held[vehicle.pk]] += 1
+        elif vehicle.pk in busy:
+            fleet.busy += 1
+        else:
+            fleet.idle.append(vehicle)
+    return fleet
+
+
+_HOLDING: dict[str, str] = {
+    VehicleCommand.Kind.PAUSE: "told to pause",
+    VehicleCommand.Kind.CHARGE: "sent to charge",
+    VehicleCommand.Kind.PARK: "sent to park",
+}
+
+
+def list_held_vehicles(*, since: datetime) -> dict[int, str]:
+    """Vehicles whose latest pause/resume/charge/park command since `since` holds them back
+    from dispatch (anything but a resume), with the reason."""
+    kinds = [*_HOLDING, str(VehicleCommand.Kind.RESUME)]
+    latest: dict[int, str] = {}
+    for vehicle_id, kind in (
+        VehicleCommand.objects.filter(created_at__gte=since, kind__in=kinds)
+        .order_by("created_at", "pk")
+        .values_list("vehicle_id", "kind")
+    ):
+        latest[vehicle_id] = kind
+    return {pk: _HOLDING[kind] for pk, kind in latest.items() if kind in _HOLDING}
+
+
+def _unavailable_reason(vehicle: Vehicle) -> str:
+    if vehicle.has_fatal_error:
+        return "in error"
+    if vehicle.paused:
+        return "paused"
+    if vehicle.operating_mode not in {"AUTOMATIC", "SEMIAUTOMATIC"}:
+        return f"in {vehicle.operating_mode or 'unknown'} mode"
+    return "without a position"
+
+
+def get_idle_since(*, vehicle_ids: list[int]) -> dict[int, datetime]:
+    """When each vehicle's last transport order ended (vehicles without one are left out)."""
+    rows = (
+        TransportOrder.objects.filter(vehicle_id__in=vehicle_ids, finished_at__isnull=False)
+        .values("vehicle_id")
+        .annotate(last=Max("finished_at"))
+    )
+    return {row["vehicle_id"]: row["last"] for row in rows}
 
 
 def list_active_orders() -> QuerySet[TransportOrder]:
     """Orders that a vehicle is assigned to or driving: what `control` executes."""
     return TransportOrder.objects.filter(status__in=TransportOrder.ACTIVE_STATUSES).select_related(
         "vehicle", "source__node", "destination__node", "source__map"
+    )
+
+
+STATE_GRACE = timedelta(seconds=5)  # a state this long after the assignment has had its chance
+
+
+def list_stale_assignments(*, assigned_before: datetime) -> QuerySet[TransportOrder]:
+    """Orders assigned before `assigned_before` that control has evidently not sent.
+
+    Conservative on purpose: besides not started, not recorded as sent and not being cancelled,
+    the vehicle must have reported a state after the assignment (plus a grace for control's
+    flush) that does not name the order. A vehicle that has been silent since the assignment
+    may have received the order and be driving it offline, so its order is left alone.
+    """
+    return (
+        TransportOrder.objects.filter(
+            status=Status.ASSIGNED,
+            assigned_at__lt=assigned_before,
+            started_at__isnull=True,
+            sent_at__isnull=True,
+            cancel_requested=False,
+            vehicle__last_seen__gt=F("assigned_at") + STATE_GRACE,
+        )
+        .exclude(vehicle__order_id=F("vda_order_id"))
+        .select_related("vehicle")
+    )
+
+
+def list_transport_orders(*, filters: dict[str, Any]) -> QuerySet[TransportOrder]:
+    """Orders for the API, newest first, narrowed by the validated `filters` of the list call."""
+    orders = TransportOrder.objects.select_related(
+        "source", "destination", "vehicle"
+    ).prefetch_related("events")
+    exact = {
+        "status": "status",
+        "source": "source__station_id",
+        "destination": "destination__station_id",
+        "vehicle": "vehicle__serial_number",
+        "vehicle_id": "vehicle_id",
+        "external_ref": "external_ref",
+        "created_after": "created_at__gte",
+        "created_before": "created_at__lt",
+        "finished_after": "finished_at__gte",
+        "finished_before": "finished_at__lt",
+    }
+    query = Q()
+    for name, lookup in exact.items():
+        if filters.get(name) not in (None, ""):
+            query &= Q(**{lookup: filters[name]})
+    return orders.filter(query).order_by("-created_at", "-pk")
+
+
+def list_active_subscriptions() -> list[WebhookSubscription]:
+    """Webhook subscriptions of active clients that are switched on."""
+    return list(
+        WebhookSubscription.objects.filter(is_active=True, client__is_active=True).select_related(
+            "client"
+        )
+    )
+
+
+def list_due_webhook_deliveries(*, now: datetime, limit: int) -> list[int]:
+    """Ids of pending deliveries whose next attempt is due, oldest first."""
+    return list(
+        WebhookDelivery.objects.filter(
+            status=WebhookDelivery.Status.PENDING, next_attempt_at__lte=now
+        )
+        .order_by("next_attempt_at")
+        .values_list("pk", flat=True)[:limit]
     )

@@ -1,9 +1,12 @@
-"""Serializers of transport orders."""
+"""Output serializers of the orders API (inputs are nested in the views that take them)."""
 
+import json
+from typing import Any
+
+from drf_spectacular.utils import extend_schema_field
 from rest_framework import serializers
 
-from maps.models import Station
-from orders.models import OrderEvent, TransportOrder
+from orders.models import OrderEvent, TransportOrder, VehicleCommand, WebhookSubscription
 
 
 class OrderEventSerializer(serializers.ModelSerializer[OrderEvent]):
@@ -13,9 +16,15 @@ class OrderEventSerializer(serializers.ModelSerializer[OrderEvent]):
 
 
 class TransportOrderSerializer(serializers.ModelSerializer[TransportOrder]):
-    source = serializers.CharField(source="source.station_id")  # type: ignore[assignment]
-    destination = serializers.CharField(source="destination.station_id")
-    vehicle = serializers.CharField(source="vehicle.serial_number", default=None)
+    """A transport order with its timeline; stations and vehicle by their ids in the layout."""
+
+    source = serializers.CharField(source="source.station_id", read_only=True)  # type: ignore[assignment]
+    destination = serializers.CharField(source="destination.station_id", read_only=True)
+    map = serializers.CharField(source="source.map.map_id", read_only=True)
+    vehicle = serializers.CharField(
+        source="vehicle.serial_number", default=None, read_only=True, allow_null=True
+    )
+    vehicle_id = serializers.IntegerField(read_only=True, allow_null=True)
     events = OrderEventSerializer(many=True, read_only=True)
 
     class Meta:
@@ -24,12 +33,17 @@ class TransportOrderSerializer(serializers.ModelSerializer[TransportOrder]):
             "id",
             "source",
             "destination",
+            "map",
             "load_id",
             "load_type",
             "priority",
             "external_ref",
+            "earliest_start",
+            "deadline",
             "status",
+            "dispatch_note",
             "vehicle",
+            "vehicle_id",
             "route",
             "failure_reason",
             "cancel_requested",
@@ -39,22 +53,70 @@ class TransportOrderSerializer(serializers.ModelSerializer[TransportOrder]):
             "finished_at",
             "events",
         ]
+        read_only_fields = fields
 
 
-class TransportOrderCreateSerializer(serializers.Serializer[dict[str, object]]):
-    """Input of a new order; stations by their station id."""
+class VehicleCommandSerializer(serializers.ModelSerializer[VehicleCommand]):
+    """A command as queued for control."""
 
-    source = serializers.SlugRelatedField(  # type: ignore[assignment]
-        slug_field="station_id", queryset=Station.objects.all()
-    )
-    destination = serializers.SlugRelatedField(
-        slug_field="station_id", queryset=Station.objects.all()
-    )
-    priority = serializers.IntegerField(default=0, min_value=-1000, max_value=1000)
-    load_id = serializers.CharField(default="", allow_blank=True, max_length=100)
-    load_type = serializers.CharField(default="EPAL", max_length=100)
-    external_ref = serializers.CharField(default="", allow_blank=True, max_length=200)
+    class Meta:
+        model = VehicleCommand
+        fields = ["id", "vehicle", "kind", "parameters", "created_at"]
+        read_only_fields = fields
 
 
-class TransportOrderCancelSerializer(serializers.Serializer[dict[str, object]]):
-    reason = serializers.CharField(default="", allow_blank=True, max_length=200)
+class WebhookSubscriptionSerializer(serializers.ModelSerializer[WebhookSubscription]):
+    """A subscription without its secret (the secret is shown once, when it is created)."""
+
+    events = serializers.ListField(child=serializers.CharField(), read_only=True)
+
+    class Meta:
+        model = WebhookSubscription
+        fields = [
+            "id",
+            "url",
+            "events",
+            "description",
+            "own_orders_only",
+            "is_active",
+            "created_at",
+        ]
+        read_only_fields = fields
+
+
+class WebhookSubscriptionCreatedSerializer(WebhookSubscriptionSerializer):
+    """The answer to creating a subscription: with the signing secret, shown this once."""
+
+    class Meta(WebhookSubscriptionSerializer.Meta):
+        fields = [*WebhookSubscriptionSerializer.Meta.fields, "secret"]
+        read_only_fields = fields
+
+
+@extend_schema_field(
+    {
+        "oneOf": [
+            {"type": "string"},
+            {"type": "number"},
+            {"type": "boolean"},
+            {"type": "array", "items": {}},
+            {"type": "object"},
+        ]
+    }
+)
+class ParameterValueField(serializers.JSONField):
+    """The value of an action parameter: any JSON value but null."""
+
+
+def validate_json_parameters(value: Any) -> Any:
+    """Parameters of an instant action: a small JSON object of plain values without NUL
+    characters (PostgreSQL cannot store those in JSON)."""
+    if not isinstance(value, dict):
+        raise serializers.ValidationError("Expected an object of parameters.")
+    text = json.dumps(value)
+    if len(text) > 4000:
+        raise serializers.ValidationError("At most 4000 characters of parameters.")
+    if "\\u0000" in text:
+        raise serializers.ValidationError("Null characters are not allowed.")
+    if any(len(key) > 100 or not key for key in value):
+        raise serializers.ValidationError("Parameter keys have 1 to 100 characters.")
+    return value

@@ -1,53 +1,184 @@
-"""The ERP API for transport orders: create, list, get, cancel."""
+"""The ERP API for transport orders: create (idempotent), list, get, cancel, change priority."""
 
 from typing import Any
 
+from django.db.models import QuerySet
 from django.shortcuts import get_object_or_404
-from rest_framework import generics, status
+from drf_spectacular.utils import (
+    OpenApiExample,
+    OpenApiResponse,
+    extend_schema,
+    extend_schema_serializer,
+)
+from rest_framework import generics, serializers, status
 from rest_framework.request import Request
 from rest_framework.response import Response
 from rest_framework.views import APIView
 
-from orders import services
-from orders.api.serializers import (
-    TransportOrderCancelSerializer,
-    TransportOrderCreateSerializer,
-    TransportOrderSerializer,
-)
+from maps.models import Station
+from orders import selectors, services
+from orders.api import idempotency
+from orders.api.serializers import TransportOrderSerializer
 from orders.models import TransportOrder
+
+CONFLICT = OpenApiResponse(description="Not allowed in the order's current state (`detail`).")
+UNPROCESSABLE = OpenApiResponse(description="Well-formed but cannot be carried out (`detail`).")
+
+
+class UpperCaseChoiceField(serializers.ChoiceField):
+    """A choice that also accepts lower case (`?status=new`)."""
+
+    def to_internal_value(self, data: Any) -> Any:
+        return super().to_internal_value(str(data).upper())
 
 
 class TransportOrderListCreateApi(generics.ListAPIView[TransportOrder]):
-    """GET: orders, newest first, filterable by `status`. POST: create an order."""
+    """GET: transport orders, newest first, with filters. POST: create one."""
 
     serializer_class = TransportOrderSerializer
 
-    def get_queryset(self) -> Any:
-        orders = TransportOrder.objects.select_related(
-            "source", "destination", "vehicle"
-        ).prefetch_related("events")
-        wanted = self.request.query_params.get("status")
-        return orders.filter(status=wanted.upper()) if wanted else orders
+    @extend_schema_serializer(component_name="OrderFilter")
+    class FilterSerializer(serializers.Serializer[dict[str, Any]]):
+        status = UpperCaseChoiceField(choices=TransportOrder.Status.choices, required=False)
+        vehicle = serializers.CharField(required=False, help_text="serial number")
+        vehicle_id = serializers.IntegerField(required=False, min_value=1, max_value=2**62)
+        source = serializers.CharField(  # type: ignore[assignment]
+            required=False, help_text="station id"
+        )
+        destination = serializers.CharField(required=False, help_text="station id")
+        external_ref = serializers.CharField(required=False)
+        created_after = serializers.DateTimeField(required=False)
+        created_before = serializers.DateTimeField(required=False)
+        finished_after = serializers.DateTimeField(required=False)
+        finished_before = serializers.DateTimeField(required=False)
 
+    @extend_schema_serializer(component_name="OrderCreate")
+    class InputSerializer(serializers.Serializer[dict[str, Any]]):
+        source = serializers.CharField(  # type: ignore[assignment]
+            max_length=100, help_text="station id of the pickup"
+        )
+        destination = serializers.CharField(max_length=100, help_text="station id of the drop")
+        map = serializers.CharField(
+            max_length=100, required=False, help_text="map id; needed when station ids repeat"
+        )
+        priority = serializers.IntegerField(default=0, min_value=-1000, max_value=1000)
+        load_id = serializers.CharField(default="", allow_blank=True, max_length=100)
+        load_type = serializers.CharField(default="EPAL", max_length=100)
+        external_ref = serializers.CharField(default="", allow_blank=True, max_length=200)
+        earliest_start = serializers.DateTimeField(required=False, allow_null=True)
+        deadline = serializers.DateTimeField(required=False, allow_null=True)
+
+    @extend_schema(parameters=[FilterSerializer])
+    def get(self, request: Request, *args: Any, **kwargs: Any) -> Response:
+        return super().get(request, *args, **kwargs)
+
+    def get_queryset(self) -> QuerySet[TransportOrder]:
+        filters = self.FilterSerializer(data=self.request.query_params)
+        filters.is_valid(raise_exception=True)
+        return selectors.list_transport_orders(filters=filters.validated_data)
+
+    @extend_schema(
+        request=InputSerializer,
+        parameters=[idempotency.PARAMETER],
+        examples=[
+            OpenApiExample(
+                "Pallet from a pick to a drop station",
+                request_only=True,
+                value={
+                    "source": "PICK-1",
+                    "destination": "DROP-3",
+                    "load_id": "PAL-0042",
+                    "external_ref": "SO-2026-1187",
+                    "priority": 5,
+                    "deadline": "2030-01-01T10:30:00Z",
+                },
+            )
+        ],
+        responses={
+            201: TransportOrderSerializer,
+            409: OpenApiResponse(description="The same Idempotency-Key is still in flight."),
+            422: UNPROCESSABLE,
+        },
+    )
     def post(self, request: Request) -> Response:
-        data = TransportOrderCreateSerializer(data=request.data)
+        return idempotency.idempotent(request, lambda: self._create(request))
+
+    def _create(self, request: Request) -> Response:
+        data = self.InputSerializer(data=request.data)
         data.is_valid(raise_exception=True)
-        order = services.create_transport_order(created_by=request.user, **data.validated_data)
+        fields = dict(data.validated_data)
+        map_id = fields.pop("map", None)
+        fields["source"] = _station("source", fields["source"], map_id)
+        fields["destination"] = _station("destination", fields["destination"], map_id)
+        order = services.create_transport_order(created_by=request.user, **fields)
         return Response(TransportOrderSerializer(order).data, status=status.HTTP_201_CREATED)
 
 
+def _station(field: str, station_id: str, map_id: str | None) -> Station:
+    stations = Station.objects.filter(station_id=station_id).select_related("map", "node")
+    if map_id is not None:
+        stations = stations.filter(map__map_id=map_id)
+    found = list(stations[:2])
+    if not found:
+        raise serializers.ValidationError({field: [f"No station {station_id!r}."]})
+    if len(found) > 1:
+        raise serializers.ValidationError(
+            {field: [f"{station_id!r} is on several maps: give map."]}
+        )
+    return found[0]
+
+
 class TransportOrderDetailApi(generics.RetrieveAPIView[TransportOrder]):
+    """One transport order with its event timeline."""
+
     serializer_class = TransportOrderSerializer
-    queryset = TransportOrder.objects.select_related("source", "destination", "vehicle")
+    queryset = TransportOrder.objects.select_related(
+        "source__map", "destination", "vehicle"
+    ).prefetch_related("events")
 
 
 class TransportOrderCancelApi(APIView):
+    """Cancel an order: at once while it waits, else the vehicle is asked to stop (the order
+    shows `cancel_requested` until the vehicle confirms)."""
+
+    @extend_schema_serializer(component_name="OrderCancel")
+    class InputSerializer(serializers.Serializer[dict[str, Any]]):
+        reason = serializers.CharField(default="", allow_blank=True, max_length=200)
+
+    @extend_schema(
+        request=InputSerializer, responses={200: TransportOrderSerializer, 409: CONFLICT}
+    )
     def post(self, request: Request, pk: int) -> Response:
-        data = TransportOrderCancelSerializer(data=request.data)
+        data = self.InputSerializer(data=request.data)
         data.is_valid(raise_exception=True)
         order = services.cancel_transport_order(
             order=get_object_or_404(TransportOrder, pk=pk),
             reason=data.validated_data["reason"],
+            by=request.user,
+        )
+        return Response(TransportOrderSerializer(order).data)
+
+
+class TransportOrderPriorityApi(APIView):
+    """Change an open order's priority, and its deadline when given (null clears it)."""
+
+    @extend_schema_serializer(component_name="OrderPriority")
+    class InputSerializer(serializers.Serializer[dict[str, Any]]):
+        priority = serializers.IntegerField(min_value=-1000, max_value=1000)
+        deadline = serializers.DateTimeField(required=False, allow_null=True)
+
+    @extend_schema(
+        request=InputSerializer,
+        responses={200: TransportOrderSerializer, 409: CONFLICT, 422: UNPROCESSABLE},
+    )
+    def post(self, request: Request, pk: int) -> Response:
+        data = self.InputSerializer(data=request.data)
+        data.is_valid(raise_exception=True)
+        order = services.update_order_priority(
+            order=get_object_or_404(TransportOrder, pk=pk),
+            priority=data.validated_data["priority"],
+            deadline=data.validated_data.get("deadline"),
+            change_deadline="deadline" in data.validated_data,
             by=request.user,
         )
         return Response(TransportOrderSerializer(order).data)

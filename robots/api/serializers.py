@@ -6,6 +6,10 @@ from robots.models import Vehicle
 
 
 class VehicleSerializer(serializers.ModelSerializer[Vehicle]):
+    """A vehicle's identity and latest state; `available` says whether dispatch may use it."""
+
+    available = serializers.BooleanField(source="is_available", read_only=True)
+
     class Meta:
         model = Vehicle
         fields = [
@@ -15,6 +19,7 @@ class VehicleSerializer(serializers.ModelSerializer[Vehicle]):
             "name",
             "protocol_version",
             "connection",
+            "available",
             "map_id",
             "x",
             "y",
@@ -30,3 +35,4 @@ class VehicleSerializer(serializers.ModelSerializer[Vehicle]):
             "last_node_id",
             "last_seen",
         ]
+        read_only_fields = fields

@@ -124,10 +124,8 @@ def test_cancel_of_a_new_order_is_immediate(demo_map) -> None:
 
 
 def test_cancel_of_an_assigned_order_asks_control(
-    demo_map, django_capture_on_commit_callbacks, monkeypatch
+    demo_map, django_capture_on_commit_callbacks, sent_commands
 ) -> None:
-    sent = []
-    monkeypatch.setattr(services, "send_command", lambda kind, **kw: sent.append((kind, kw)))
     order = TransportOrder.objects.create(
         source=station(demo_map, "PICK-1"),
         destination=station(demo_map, "DROP-1"),
@@ -141,7 +139,7 @@ def test_cancel_of_an_assigned_order_asks_control(
     order.refresh_from_db()
     assert order.status == TransportOrder.Status.ASSIGNED
     assert order.cancel_requested
-    assert sent == [("order.cancel", {"order": order.pk})]
+    assert sent_commands == [("order.cancel", {"order": order.pk})]
 
 
 def test_requeue_returns_an_assigned_order_to_dispatch(demo_map) -> None:

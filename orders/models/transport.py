@@ -9,7 +9,9 @@ class TransportOrder(models.Model):
 
     Dispatch assigns a vehicle and a route (node ids from the vehicle's node via the source to
     the destination); `control` sends it as a VDA 5050 order (`vda_order_id`) and tracks it to
-    the end from the vehicle's state.
+    the end from the vehicle's state. `earliest_start` holds an order back from dispatch until
+    then; `deadline` makes it more urgent among orders of the same priority. `dispatch_note`
+    says why dispatch has not assigned it yet.
     """
 
     class Status(models.TextChoices):
@@ -28,7 +30,11 @@ class TransportOrder(models.Model):
     load_id = models.CharField(max_length=100, blank=True)
     load_type = models.CharField(max_length=100, blank=True, default="EPAL")
     priority = models.IntegerField(default=0, help_text="higher goes first")
-    external_ref = models.CharField(max_length=200, blank=True)
+    external_ref = models.CharField(max_length=200, blank=True, db_index=True)
+    earliest_start = models.DateTimeField(
+        null=True, blank=True, help_text="not dispatched before this time"
+    )
+    deadline = models.DateTimeField(null=True, blank=True, help_text="should be finished by then")
     status = models.CharField(
         max_length=20, choices=Status.choices, default=Status.NEW, db_index=True
     )
@@ -42,12 +48,18 @@ class TransportOrder(models.Model):
     route = models.JSONField(default=list, blank=True, help_text="node ids to drive")
     vda_order_id = models.CharField(max_length=100, blank=True)
     failure_reason = models.TextField(blank=True)
+    dispatch_note = models.CharField(
+        max_length=200, blank=True, help_text="why dispatch has not assigned the order yet"
+    )
     cancel_requested = models.BooleanField(default=False)
     created_by = models.ForeignKey(
         settings.AUTH_USER_MODEL, null=True, blank=True, on_delete=models.SET_NULL, related_name="+"
     )
     created_at = models.DateTimeField(auto_now_add=True)
     assigned_at = models.DateTimeField(null=True, blank=True)
+    sent_at = models.DateTimeField(
+        null=True, blank=True, help_text="when control published the VDA 5050 order"
+    )
     started_at = models.DateTimeField(null=True, blank=True)
     finished_at = models.DateTimeField(null=True, blank=True)
     updated_at = models.DateTimeField(auto_now=True)
@@ -65,6 +77,12 @@ class TransportOrder(models.Model):
             models.CheckConstraint(
                 condition=~models.Q(source=models.F("destination")),
                 name="source_is_not_destination",
+            ),
+            models.CheckConstraint(
+                condition=models.Q(earliest_start__isnull=True)
+                | models.Q(deadline__isnull=True)
+                | models.Q(deadline__gt=models.F("earliest_start")),
+                name="deadline_after_earliest_start",
             ),
         ]
 
@@ -87,6 +105,7 @@ class OrderEvent(models.Model):
         FINISHED = "FINISHED", "finished"
         FAILED = "FAILED", "failed"
         REQUEUED = "REQUEUED", "requeued"
+        UPDATED = "UPDATED", "updated"
         CANCEL_REQUESTED = "CANCEL_REQUESTED", "cancel requested"
         CANCELLED = "CANCELLED", "cancelled"
 
