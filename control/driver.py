@@ -134,6 +134,8 @@ class OrderDriver:
         if not self._send(vehicle, order, execution, window, update_id=0):
             return None
         vehicle.execution = execution
+        # From now on only the vehicle's state decides; the reconciler must not take it back.
+        self.progress.append(Progress("sent", order.transport_order_id))
         return execution
 
     def _extend(self, vehicle: LiveVehicle, order: ActiveOrder, execution: OrderExecution) -> None:

@@ -53,7 +53,7 @@ class Window:
 class Progress:
     """Something that happened to a transport order, to be persisted by the flusher."""
 
-    kind: str  # started | step | finished | failed | cancelled | requeued
+    kind: str  # sent | started | step | finished | failed | cancelled | requeued
     order_id: int
     detail: dict[str, str] = field(default_factory=dict)
 

@@ -86,7 +86,9 @@ class DjangoStore:
 
 def _apply(progress: Progress) -> None:
     order_id, detail = progress.order_id, progress.detail
-    if progress.kind == "started":
+    if progress.kind == "sent":
+        order_services.mark_order_sent(order_id=order_id)
+    elif progress.kind == "started":
         order_services.mark_order_started(order_id=order_id)
     elif progress.kind == "step":
         order_services.mark_step_reached(

@@ -126,6 +126,7 @@ def test_progress_from_state_goes_to_the_flusher_in_order(controller) -> None:
 
     batch = controller.store.batches[-1]
     assert [(p.kind, p.detail.get("step")) for p in batch.progress] == [
+        ("sent", None),
         ("started", None),
         ("step", "pick"),
         ("step", "drop"),
@@ -220,7 +221,7 @@ def test_a_failed_flush_is_retried_with_nothing_lost(controller) -> None:
 
     controller.flush()
 
-    assert [p.kind for p in controller.store.batches[-1].progress] == ["started"]
+    assert [p.kind for p in controller.store.batches[-1].progress] == ["sent", "started"]
     assert controller.store.batches[-1].snapshots[0]["order_id"] == "TO-7"
 
 
@@ -247,6 +248,7 @@ def test_an_order_finished_in_memory_is_not_adopted_again_before_the_flush(contr
     controller.flush()
 
     assert [p.kind for p in controller.store.batches[-1].progress] == [
+        "sent",
         "started",
         "step",
         "step",
@@ -284,7 +286,7 @@ def test_cancel_before_the_vehicle_took_the_order_ends_on_no_order_to_cancel(
     )
     controller.flush()
 
-    assert [p.kind for p in controller.store.batches[-1].progress] == ["cancelled"]
+    assert [p.kind for p in controller.store.batches[-1].progress] == ["sent", "cancelled"]
     assert controller.fleet.by_pk(1).execution is None
 
 
@@ -487,7 +489,7 @@ def test_G35_an_order_is_finished_only_when_the_whole_route_was_released(stepwis
 
     assert [m["orderUpdateId"] for m in orders_in(sent)] == [0, 1, 2]
     kinds = [p.kind for p in stepwise.store.batches[-1].progress]
-    assert kinds == ["started", "step", "step", "finished"]
+    assert kinds == ["sent", "started", "step", "step", "finished"]
 
 
 def test_B14_an_unconfirmed_order_is_resent_identically_then_fails_after_max_attempts(
