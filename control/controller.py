@@ -62,6 +62,7 @@ class Controller:
         self.counters: Counter[str] = Counter()
         self.publisher = Publisher(publish, self.counters)
         self.lock = threading.RLock()
+        self._unflushed_outcomes: list[InstantActionTrack] = []  # from a failed flush
         self.driver = OrderDriver(self.publisher, lambda: self.layouts, base_ahead=base_ahead)
 
     def load(self) -> None:
@@ -252,6 +253,7 @@ class Controller:
         batch = FlushBatch()
         with self.lock:
             batch.progress, self.driver.progress = self.driver.progress, []
+            batch.command_outcomes, self._unflushed_outcomes = self._unflushed_outcomes, []
             now = time.monotonic()
             for vehicle in self.fleet.vehicles.values():
                 link = vehicle.session.link(now)
@@ -262,6 +264,8 @@ class Controller:
                 if available and not vehicle.was_available:
                     batch.newly_available += 1
                 vehicle.was_available = available
+                batch.command_outcomes += vehicle.command_outcomes
+                vehicle.command_outcomes = []
                 if not vehicle.needs_flush:
                     continue
                 vehicle.needs_flush = False
@@ -277,7 +281,13 @@ class Controller:
     def flush(self) -> None:
         """Write one batch; on a database error the batch is put back and retried next time."""
         batch = self.collect_flush()
-        if not (batch.new_vehicles or batch.snapshots or batch.progress or batch.factsheets):
+        if not (
+            batch.new_vehicles
+            or batch.snapshots
+            or batch.progress
+            or batch.factsheets
+            or batch.command_outcomes
+        ):
             return
         try:
             registered = self.store.flush(batch)
@@ -295,6 +305,7 @@ class Controller:
     def _requeue(self, batch: FlushBatch) -> None:
         with self.lock:
             self.driver.progress[:0] = batch.progress
+            self._unflushed_outcomes[:0] = batch.command_outcomes
             for vehicle in self.fleet.vehicles.values():
                 if vehicle.pk is None or vehicle.pk in {s["pk"] for s in batch.snapshots}:
                     vehicle.needs_flush = True

@@ -5,7 +5,7 @@ broadcaster into browser snapshots.
 """
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import datetime
 from typing import Any
 
@@ -49,6 +49,8 @@ class LiveVehicle:
     factsheet_requested: bool = False
     capabilities: Capabilities | None = None
     instant_actions: dict[str, InstantActionTrack] = field(default_factory=dict)
+    # Outcomes of operators' commands (tracks with a request id) for the flusher to record.
+    command_outcomes: list[InstantActionTrack] = field(default_factory=list)
     visual_position: vda5050.AgvPosition | None = None
     last_seen: datetime | None = None
     execution: OrderExecution | None = None
@@ -103,6 +105,7 @@ class LiveVehicle:
 
     def track(self, action: InstantActionTrack) -> None:
         self.instant_actions[action.action_id] = action
+        self._report(action)
         while len(self.instant_actions) > TRACKED_INSTANT_ACTIONS:
             del self.instant_actions[next(iter(self.instant_actions))]
         self.needs_broadcast = True
@@ -114,6 +117,12 @@ class LiveVehicle:
             if tracked is not None and tracked.status != str(action_state.action_status):
                 tracked.status = str(action_state.action_status)
                 tracked.reason = action_state.result_description or ""
+                self._report(tracked)
+
+    def _report(self, action: InstantActionTrack) -> None:
+        if action.request is not None:
+            self.command_outcomes.append(replace(action))  # a copy: later changes come anew
+            self.needs_flush = True
 
     @property
     def is_available(self) -> bool:

@@ -75,6 +75,14 @@ class DjangoStore:
             robot_services.save_factsheets(factsheets=batch.factsheets)
         for progress in batch.progress:
             _apply(progress)
+        for outcome in batch.command_outcomes:
+            if outcome.request is not None and outcome.request.isdigit():
+                order_services.record_command_outcome(
+                    command_id=int(outcome.request),
+                    status=outcome.status,
+                    result=outcome.reason,
+                    action_id="" if outcome.status == "REFUSED" else outcome.action_id,
+                )
         return registered
 
     def request_dispatch(self) -> None:

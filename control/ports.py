@@ -4,7 +4,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from control.execution import LayoutIndex, Progress
-from control.live import LiveVehicle
+from control.live import InstantActionTrack, LiveVehicle
 
 
 @dataclass(frozen=True)
@@ -32,6 +32,7 @@ class FlushBatch:
     snapshots: list[dict[str, Any]] = field(default_factory=list)
     factsheets: dict[int, dict[str, Any]] = field(default_factory=dict)
     progress: list[Progress] = field(default_factory=list)
+    command_outcomes: list[InstantActionTrack] = field(default_factory=list)
     newly_available: int = 0
 
 

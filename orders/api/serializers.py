@@ -61,7 +61,17 @@ class VehicleCommandSerializer(serializers.ModelSerializer[VehicleCommand]):
 
     class Meta:
         model = VehicleCommand
-        fields = ["id", "vehicle", "kind", "parameters", "created_at"]
+        fields = [
+            "id",
+            "vehicle",
+            "kind",
+            "parameters",
+            "status",
+            "result",
+            "action_id",
+            "created_at",
+            "updated_at",
+        ]
         read_only_fields = fields
 
 

@@ -13,6 +13,11 @@ urlpatterns = [
     ),
     path("vehicles/<id:pk>/pause/", vehicle_views.VehiclePauseApi.as_view(), name="vehicle-pause"),
     path(
+        "vehicles/<id:pk>/commands/",
+        vehicle_views.VehicleCommandListApi.as_view(),
+        name="vehicle-commands",
+    ),
+    path(
         "vehicles/<id:pk>/resume/", vehicle_views.VehicleResumeApi.as_view(), name="vehicle-resume"
     ),
     path(

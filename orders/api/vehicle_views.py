@@ -143,3 +143,14 @@ class VehicleInstantActionApi(APIView):
             by=request.user,
         )
         return _accepted(command)
+
+
+class VehicleCommandListApi(APIView):
+    """The vehicle's latest commands with their outcome (queued, sent, refused with the reason,
+    running, finished, failed), newest first."""
+
+    @extend_schema(responses=VehicleCommandSerializer(many=True))
+    def get(self, request: Request, pk: int) -> Response:
+        vehicle = get_object_or_404(Vehicle, pk=pk)
+        commands = VehicleCommand.objects.filter(vehicle=vehicle)[:50]
+        return Response(VehicleCommandSerializer(commands, many=True).data)

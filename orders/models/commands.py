@@ -22,7 +22,20 @@ class VehicleCommand(models.Model):
     requested_by = models.ForeignKey(
         settings.AUTH_USER_MODEL, null=True, blank=True, on_delete=models.SET_NULL, related_name="+"
     )
+
+    class Status(models.TextChoices):
+        QUEUED = "QUEUED", "queued"  # waiting for control
+        SENT = "SENT", "sent"  # control published the instant action
+        REFUSED = "REFUSED", "refused"  # control did not send it; `result` says why
+        RUNNING = "RUNNING", "running"
+        FINISHED = "FINISHED", "finished"
+        FAILED = "FAILED", "failed"
+
+    status = models.CharField(max_length=10, choices=Status.choices, default=Status.QUEUED)
+    result = models.TextField(blank=True, help_text="why it was refused or failed")
+    action_id = models.CharField(max_length=100, blank=True, help_text="VDA 5050 actionId")
     created_at = models.DateTimeField(auto_now_add=True)
+    updated_at = models.DateTimeField(auto_now=True)
 
     class Meta:
         ordering = ["-created_at", "-pk"]

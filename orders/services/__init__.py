@@ -37,6 +37,7 @@ from orders.services.transport import (
 )
 from orders.services.vehicles import (
     pause_vehicle,
+    record_command_outcome,
     request_instant_action,
     resume_vehicle,
     send_vehicle_to_charge,
@@ -82,6 +83,7 @@ __all__ = [
     "prune_webhook_deliveries",
     "reconcile_stale_assignments",
     "release_idempotency_key",
+    "record_command_outcome",
     "request_instant_action",
     "requeue_order",
     "resume_vehicle",

@@ -7,6 +7,7 @@ from typing import Any
 from django.contrib.auth.base_user import AbstractBaseUser
 from django.contrib.auth.models import AnonymousUser, User
 from django.db import transaction
+from django.utils import timezone
 
 from fleet.control_queue import send_command
 from fleet.exceptions import DomainError, InvalidRequestError
@@ -17,6 +18,7 @@ from orders.services.webhooks import emit_event
 from robots.models import Vehicle
 
 Kind = VehicleCommand.Kind
+Status = VehicleCommand.Status
 ACTION_TYPE = re.compile(r"^[A-Za-z][A-Za-z0-9_.\-]{0,63}$")
 # Instant actions with a command or a workflow of their own.
 RESERVED_ACTIONS = {
@@ -144,3 +146,28 @@ def _instant_actions(vehicle: Vehicle) -> set[str] | None:
         for action in actions
         if isinstance(action, dict) and "INSTANT" in (action.get("actionScopes") or [])
     }
+
+
+_OUTCOMES = {
+    "SENT": Status.SENT,
+    "REFUSED": Status.REFUSED,
+    "WAITING": Status.SENT,
+    "INITIALIZING": Status.RUNNING,
+    "RUNNING": Status.RUNNING,
+    "PAUSED": Status.RUNNING,
+    "FINISHED": Status.FINISHED,
+    "FAILED": Status.FAILED,
+}
+
+
+def record_command_outcome(
+    *, command_id: int, status: str, result: str = "", action_id: str = ""
+) -> None:
+    """Control's word on a command: sent, refused (with the reason), or the VDA 5050 action
+    status the vehicle reported. Unknown statuses and finished commands are left alone."""
+    target = _OUTCOMES.get(status)
+    if target is None:
+        return
+    VehicleCommand.objects.filter(pk=command_id).exclude(
+        status__in=[Status.FINISHED, Status.FAILED, Status.REFUSED]
+    ).update(status=target, result=result[:2000], action_id=action_id, updated_at=timezone.now())

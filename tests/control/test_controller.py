@@ -651,3 +651,29 @@ def test_commands_control_cannot_carry_out_yet_are_refused_with_the_reason(
     assert (track.status, track.request) == ("REFUSED", "5")
     assert "not supported yet" in track.reason
     assert sent == []
+
+
+def test_command_outcomes_reach_the_flusher_sent_then_finished(controller, sent) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    controller.execute({"kind": "vehicle.pause", "vehicle": 1, "command": 9})
+    action_id = sent[-1][1]["actions"][0]["actionId"]
+    controller.flush()
+    controller.handle_message(STATE_TOPIC, state(header_id=2, actions=((action_id, "FINISHED"),)))
+
+    controller.flush()
+
+    outcomes = [(o.request, o.status) for b in controller.store.batches for o in b.command_outcomes]
+    assert outcomes == [("9", "SENT"), ("9", "FINISHED")]
+
+
+def test_command_outcomes_survive_a_failed_flush(controller) -> None:
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    controller.execute({"kind": "vehicle.park", "vehicle": 1, "command": 4})
+    controller.store.fail_flush = True
+    controller.flush()
+    controller.store.fail_flush = False
+
+    controller.flush()
+
+    (outcome,) = controller.store.batches[-1].command_outcomes
+    assert (outcome.request, outcome.status) == ("4", "REFUSED")
