@@ -37,6 +37,9 @@ class NullStore:
     def flush(self, batch: FlushBatch) -> dict[tuple[str, str], int]:
         return {v.key: i for i, v in enumerate(batch.new_vehicles)}
 
+    def vehicle_dialects(self) -> dict[int, str]:
+        return {}
+
     def request_dispatch(self) -> None:
         return None
 

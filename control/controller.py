@@ -75,6 +75,7 @@ class Controller:
                 )
                 self.fleet.set_pk(vehicle, row["pk"])
                 vehicle.version = row["protocol_version"]
+                vehicle.dialect = row.get("dialect", "STANDARD")
                 vehicle.needs_flush = False
 
     # Inbound: one handler per topic kind -------------------------------------------------------
@@ -178,6 +179,12 @@ class Controller:
             )
 
     # Outbound ----------------------------------------------------------------------------------
+
+    def apply_dialects(self, dialects: dict[int, str]) -> None:
+        """Take the registry's dialect per vehicle (non-standard ones; others are standard)."""
+        with self.lock:
+            for vehicle in self.fleet.vehicles.values():
+                vehicle.dialect = dialects.get(vehicle.pk or -1, "STANDARD")
 
     def sync(self, orders: list[ActiveOrder]) -> None:
         """Start, adopt, extend, resend or cancel the assigned orders read from the database."""

@@ -42,6 +42,7 @@ class LiveVehicle:
     interface_name: str
     version: str = "2.0.0"
     pk: int | None = None
+    dialect: str = "STANDARD"  # robots.Vehicle.Dialect: deviations to honour when sending
     session: ProtocolSession = field(default_factory=ProtocolSession)
     state: vda5050.State | None = None
     factsheet: dict[str, Any] | None = None

@@ -40,7 +40,7 @@ class DjangoStore:
     def load_vehicles(self) -> list[dict[str, Any]]:
         close_old_connections()
         rows = Vehicle.objects.values(
-            "pk", "manufacturer", "serial_number", "interface_name", "protocol_version"
+            "pk", "manufacturer", "serial_number", "interface_name", "protocol_version", "dialect"
         )
         return [dict(row) for row in rows]
 
@@ -84,6 +84,13 @@ class DjangoStore:
                     action_id="" if outcome.status == "REFUSED" else outcome.action_id,
                 )
         return registered
+
+    def vehicle_dialects(self) -> dict[int, str]:
+        close_old_connections()
+        rows = Vehicle.objects.exclude(dialect=Vehicle.Dialect.STANDARD).values_list(
+            "pk", "dialect"
+        )
+        return dict(rows)
 
     def request_dispatch(self) -> None:
         try:

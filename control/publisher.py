@@ -4,6 +4,8 @@ from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
+import msgspec
+
 import vda5050
 from control.live import LiveVehicle
 from vda5050 import encode
@@ -69,8 +71,17 @@ class Publisher:
             serial_number=vehicle.serial_number,
             kind=kind,
         )
-        self.publish(str(topic), encode(message), 0)
+        self.publish(str(topic), _encode_for(vehicle, kind, message), 0)
         self.counters[f"sent_{kind}"] += 1
+
+
+def _encode_for(vehicle: LiveVehicle, kind: TopicKind, message: Any) -> bytes:
+    """The message as this vehicle's stack expects it (docs/DIALECTS.md)."""
+    if kind == TopicKind.INSTANT_ACTIONS and vehicle.dialect == "INSTANT_ACTIONS_KEY":
+        data = msgspec.json.decode(encode(message))  # encode validates (no NaN, …)
+        data["instantActions"] = data.pop("actions")
+        return msgspec.json.encode(data)
+    return encode(message)
 
 
 def _discard(topic: str, payload: bytes, qos: int) -> None:

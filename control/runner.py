@@ -93,7 +93,9 @@ class ControlLoop:
         """Run until `stop()`; then flush what is left and disconnect cleanly."""
         self.controller.load()
         self.link.start()
-        due = dict.fromkeys(("SYNC_INTERVAL", "FLUSH_INTERVAL", "BROADCAST_INTERVAL"), 0.0)
+        due = dict.fromkeys(
+            ("SYNC_INTERVAL", "FLUSH_INTERVAL", "BROADCAST_INTERVAL", "REGISTRY_INTERVAL"), 0.0
+        )
         try:
             while not self._stop.is_set():
                 commands = self._safely(self.receive_commands, 0.05) or []
@@ -103,6 +105,11 @@ class ControlLoop:
                 if commands or now >= due["SYNC_INTERVAL"]:
                     self._safely(self._sync)
                     due["SYNC_INTERVAL"] = now + self.intervals["SYNC_INTERVAL"]
+                if now >= due["REGISTRY_INTERVAL"]:
+                    dialects = self._safely(self.controller.store.vehicle_dialects)
+                    if dialects is not None:
+                        self.controller.apply_dialects(dialects)
+                    due["REGISTRY_INTERVAL"] = now + self.intervals.get("REGISTRY_INTERVAL", 10.0)
                 if now >= due["FLUSH_INTERVAL"]:
                     self._safely(self.controller.flush)
                     due["FLUSH_INTERVAL"] = now + self.intervals["FLUSH_INTERVAL"]

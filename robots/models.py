@@ -24,6 +24,22 @@ class Vehicle(models.Model):
     name = models.CharField(max_length=100, blank=True)
     interface_name = models.CharField(max_length=100, default="uagv")
     protocol_version = models.CharField(max_length=20, default="2.0.0")
+
+    class Dialect(models.TextChoices):
+        """Known field deviations of deployed vehicle stacks (docs/DIALECTS.md)."""
+
+        STANDARD = "STANDARD", "standard (as the schemas say)"
+        INSTANT_ACTIONS_KEY = (
+            "INSTANT_ACTIONS_KEY",
+            ("early 2.0 stacks: instant actions under `instantActions` instead of `actions`"),
+        )
+
+    dialect = models.CharField(
+        max_length=30,
+        choices=Dialect.choices,
+        default=Dialect.STANDARD,
+        help_text="what control sends to this vehicle; takes effect within 10 s",
+    )
     factsheet = models.JSONField(null=True, blank=True)
     connection = models.CharField(
         max_length=20, choices=Connection.choices, default=Connection.UNKNOWN

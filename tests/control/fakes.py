@@ -48,6 +48,9 @@ class FakeStore:
         self.batches.append(batch)
         return {v.key: 100 + i for i, v in enumerate(batch.new_vehicles)}
 
+    def vehicle_dialects(self) -> dict[int, str]:
+        return {}
+
     def request_dispatch(self) -> None:
         self.dispatches += 1
 

@@ -677,3 +677,21 @@ def test_command_outcomes_survive_a_failed_flush(controller) -> None:
 
     (outcome,) = controller.store.batches[-1].command_outcomes
     assert (outcome.request, outcome.status) == ("4", "REFUSED")
+
+
+def test_a_vehicle_with_the_legacy_dialect_gets_instant_actions_under_their_old_key(
+    controller,
+) -> None:
+    raw: list[dict] = []
+    controller.publisher.publish = lambda topic, payload, qos: raw.append(json.loads(payload))
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    controller.apply_dialects({1: "INSTANT_ACTIONS_KEY"})
+
+    controller.execute({"kind": "vehicle.pause", "vehicle": 1})
+    controller.apply_dialects({})
+    controller.execute({"kind": "vehicle.resume", "vehicle": 1})
+
+    legacy, standard = raw[-2], raw[-1]
+    assert "actions" not in legacy
+    assert legacy["instantActions"][0]["actionType"] == "startPause"
+    assert standard["actions"][0]["actionType"] == "stopPause"
