@@ -1,5 +1,8 @@
 """Framework-free VDA 5050 vehicle simulator: N virtual AGVs over MQTT in one process.
 
+Vehicles speak 2.0.0, 2.1.0 or 3.0.0 (``--version``): the vehicle logic is shared and works
+on the 2.x Structs; :mod:`simulator.wire` converts at the message edge for 3.0.
+
 Only the :mod:`vda5050` package, paho-mqtt and the standard library may be imported here
 (an import-linter contract forbids Django, Celery, Channels and the project's apps).
 """

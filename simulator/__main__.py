@@ -1,6 +1,7 @@
 """Command line: ``python -m simulator --count N --layout FILE [options]``.
 
 Runs until SIGTERM/SIGINT, then every vehicle publishes OFFLINE and disconnects; exit 0.
+``--version 3.0.0`` makes the vehicles speak 3.0 on ``interfaceName/v3/...``.
 ``--misbehave SERIAL:key=value,...`` (repeatable) and ``--script FILE.json`` make single
 vehicles misbehave for conformance tests (keys: :data:`simulator.misbehaviour.KEYS`).
 """
@@ -69,7 +70,12 @@ def build_parser() -> argparse.ArgumentParser:
     add("--broker", default="mqtt://127.0.0.1:1883", help="mqtt://[user:pass@]host[:port]")
     add("--interface", default="uagv", help="interfaceName topic level")
     add("--manufacturer", default="sim", help="manufacturer topic level / header field")
-    add("--version", default="2.0.0", choices=["2.0.0", "2.1.0"], help="VDA 5050 version")
+    add(
+        "--version",
+        default="2.0.0",
+        choices=["2.0.0", "2.1.0", "3.0.0"],
+        help="VDA 5050 version (3.0.0 publishes on interfaceName/v3/...)",
+    )
     add("--speed", type=_positive, default=1.0, help="driving speed in m/s")
     add("--time-scale", type=_positive, default=1.0, help="time-lapse factor (10 = 10x faster)")
     add("--visualization-hz", type=_non_negative, default=1.0, help="0 disables visualization")

@@ -1,15 +1,17 @@
 """Action catalogue of the simulated vehicle and the runtime record of one action.
 
 The catalogue is the single source of truth for both the factsheet
-(``protocolFeatures.agvActions``) and order validation, so the vehicle never accepts an
-action it does not advertise and never advertises one it cannot execute.
+(``protocolFeatures.agvActions`` / 3.0 ``mobileRobotActions``) and order validation, so the
+vehicle never accepts an action it does not advertise and never advertises one it cannot
+execute. Some entries exist only in 3.0 (``majors``); their blockingTypes may include SINGLE.
+Action types are the 2.x names (``initPosition``); the 3.0 message edge renames them.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from vda5050 import Action, action_params
+from vda5050 import Action, action_params, v3
 from vda5050.enums import ActionScope, ActionStatus, BlockingType, ValueDataType
 
 I = ActionScope.INSTANT  # noqa: E741 - short aliases keep the catalogue table readable
@@ -17,6 +19,9 @@ N = ActionScope.NODE
 ALL_BLOCKING = (BlockingType.NONE, BlockingType.SOFT, BlockingType.HARD)
 STANDING = (BlockingType.SOFT, BlockingType.HARD)
 HARD = (BlockingType.HARD,)
+#: 3.0: SINGLE = driving allowed, no other action in parallel.
+WITH_SINGLE = (BlockingType.NONE, v3.BlockingType.SINGLE, BlockingType.SOFT, BlockingType.HARD)
+ONLY_V3 = frozenset({3})
 
 TERMINAL = frozenset({ActionStatus.FINISHED, ActionStatus.FAILED})
 
@@ -37,11 +42,14 @@ class ActionSpec:
 
     action_type: str
     scopes: tuple[ActionScope, ...]
-    blocking_types: tuple[BlockingType, ...]
+    blocking_types: tuple[str, ...]
+    """BlockingType members (and 3.0's SINGLE) allowed for node actions."""
     description: str
     duration: float = 0.0
     """Simulated seconds the action spends RUNNING when executed as a node action."""
     parameters: tuple[ParamSpec, ...] = ()
+    majors: frozenset[int] = frozenset({2, 3})
+    """Protocol major versions in which the vehicle offers this action."""
 
     @property
     def required_keys(self) -> frozenset[str]:
@@ -92,14 +100,36 @@ CATALOGUE: dict[str, ActionSpec] = {
             "Write a log report (logged by the simulator; finishes at once).",
             parameters=(_str("reason", "Why the report is requested.", optional=False),),
         ),
+        ActionSpec(
+            "detectObject",
+            (N,),
+            WITH_SINGLE,
+            "Look for an object (simulated: always succeeds); SINGLE keeps driving.",
+            1.0,
+            (_str("objectType", "Informational only."),),
+            majors=ONLY_V3,
+        ),
+        ActionSpec(
+            "clearInstantActions",
+            (I,),
+            ALL_BLOCKING,
+            "Remove finished and failed instant actions from instantActionStates.",
+            majors=ONLY_V3,
+        ),
     )
 }
 
 
-def check_action(action: Action, scope: ActionScope) -> str | None:
-    """Return why ``action`` cannot be used in ``scope``, or ``None`` if it is acceptable."""
+def catalogue(major: int) -> list[ActionSpec]:
+    """The actions offered in protocol major version ``major``, in catalogue order."""
+    return [spec for spec in CATALOGUE.values() if major in spec.majors]
+
+
+def check_action(action: Action, scope: ActionScope, major: int = 2) -> str | None:
+    """Return why ``action`` cannot be used in ``scope`` (of protocol ``major``), or ``None``
+    if it is acceptable."""
     spec = CATALOGUE.get(action.action_type)
-    if spec is None:
+    if spec is None or major not in spec.majors:
         return f"unsupported actionType {action.action_type!r}"
     if scope not in spec.scopes:
         return f"actionType {action.action_type!r} not supported in scope {scope}"

@@ -1,14 +1,20 @@
 """Execution of order (node) actions and instant actions for one virtual vehicle.
 
 Node actions run in list order once their node is reached and honour their blockingType
-(REFERENCE §3 E.24): NONE runs in parallel and lets the vehicle drive, SOFT runs in
-parallel but stops driving, HARD runs alone and stops driving. Each status change
+(REFERENCE §3 E.24): NONE runs in parallel and lets the vehicle drive, SINGLE (3.0) runs
+alone but lets the vehicle drive, SOFT runs in parallel but stops driving, HARD runs alone
+and stops driving. Each status change
 (WAITING → INITIALIZING → RUNNING → FINISHED/FAILED) happens on its own tick so that every
 intermediate status can appear in at least one published state.
 
 Instant actions other than ``cancelOrder`` take effect immediately when received. In
 MANUAL, SERVICE and TEACHIN mode only the read-only stateRequest, factsheetRequest and
 logReport are executed; every other instant action fails (REFERENCE §3 I.40).
+
+3.0 differences: instant actions keep their states across new orders until
+``clearInstantActions`` (REFERENCE §3 E.28), must use blockingType NONE and, if they cannot
+be executed, also raise an INVALID_INSTANT_ACTION warning; ``cancelOrder`` may name the
+``orderId`` to cancel (a different one fails with NO_ORDER_TO_CANCEL).
 """
 
 from __future__ import annotations
@@ -29,7 +35,13 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
+#: 3.0: instantActionStates at which INSTANT_ACTION_STATES_FULL (URGENT) is reported, and
+#: the most kept (the factsheet's maximum; beyond it the oldest finished ones are dropped).
+INSTANT_STATES_FULL = 100
+INSTANT_STATES_MAX = 200
+
 _STOPPING = (BlockingType.SOFT, BlockingType.HARD)
+_EXCLUSIVE = frozenset({"HARD", "SINGLE"})  # no other action in parallel
 _READ_ONLY = frozenset({"stateRequest", "factsheetRequest", "logReport"})
 
 
@@ -52,6 +64,11 @@ class ActionExecutor:
         return self._runs.get(action_id)
 
     @property
+    def instant_ids(self) -> frozenset[str]:
+        """Ids of the reported instant actions (3.0 lists them in instantActionStates)."""
+        return frozenset(k for k, run in self._runs.items() if run.node_key is None)
+
+    @property
     def all_terminal(self) -> bool:
         """Every reported action is FINISHED or FAILED."""
         return all(run.terminal for run in self._runs.values())
@@ -70,8 +87,14 @@ class ActionExecutor:
 
     # ------------------------------------------------------------------ order bookkeeping
     def reset_for_new_order(self, steps: Iterable[Step]) -> None:
-        """2.x: actionStates restart with a new order; unfinished instant actions stay."""
-        self._runs = {k: r for k, r in self._runs.items() if not r.terminal and r.node_key is None}
+        """2.x: actionStates restart with a new order; unfinished instant actions stay.
+        3.0: every instant action stays until clearInstantActions."""
+        keep_finished = self._vehicle.config.major >= 3
+        self._runs = {
+            k: r
+            for k, r in self._runs.items()
+            if r.node_key is None and (keep_finished or not r.terminal)
+        }
         self._queue = []
         self._register(steps)
 
@@ -107,12 +130,12 @@ class ActionExecutor:
     # ------------------------------------------------------------------ simulation
     def advance(self, sim_dt: float) -> None:
         """Move every triggered action on by at most one status per tick."""
-        hard_active = any_active = False
+        exclusive_active = any_active = False
         for run in self._queue:
-            hard = run.action.blocking_type is BlockingType.HARD
+            exclusive = run.action.blocking_type in _EXCLUSIVE
             if run.status is ActionStatus.WAITING:
                 # List order is execution order: a blocked action blocks all after it.
-                if hard_active or (hard and any_active):
+                if exclusive_active or (exclusive and any_active):
                     break
                 run.status = ActionStatus.INITIALIZING
                 self._vehicle.mark_state_due()
@@ -126,7 +149,7 @@ class ActionExecutor:
                     self._finish(run)
             if run.active:
                 any_active = True
-                hard_active = hard_active or hard
+                exclusive_active = exclusive_active or exclusive
         self._queue = [run for run in self._queue if not run.terminal]
 
     def _finish(self, run: ActionRun) -> None:
@@ -157,11 +180,18 @@ class ActionExecutor:
         idle = self._vehicle.idle  # before this action itself shows up as not terminal
         run = ActionRun(action=action)
         self._runs[action.action_id] = run
-        problem = check_action(action, ActionScope.INSTANT)
+        vehicle = self._vehicle
+        v3 = vehicle.config.major >= 3
+        if v3:
+            self._trim_instant_states()
+        problem = check_action(action, ActionScope.INSTANT, vehicle.config.major)
+        if problem is None and v3 and action.blocking_type != BlockingType.NONE:
+            problem = f"instant action blockingType must be NONE, got {action.blocking_type}"
         if problem is not None:
             run.fail(problem)
+            if v3:
+                vehicle.add_invalid_instant_action(action.action_id, problem)
             return
-        vehicle = self._vehicle
         kind = action.action_type
         if vehicle.operating_mode not in ORDER_MODES and kind not in _READ_ONLY:
             run.fail(f"operating mode {vehicle.operating_mode} accepts no instant actions")
@@ -180,6 +210,10 @@ class ActionExecutor:
         elif kind == "logReport":
             reason = action_params(action).get("reason")
             log.info("%s: logReport: %s", vehicle.config.serial_number, reason)
+        elif kind == "clearInstantActions":
+            self._runs = {
+                k: r for k, r in self._runs.items() if r.node_key is not None or not r.terminal
+            }
         elif kind == "initPosition" and not idle:
             run.fail("initPosition is only accepted while the vehicle is idle")
             return
@@ -190,9 +224,21 @@ class ActionExecutor:
                 return
         run.status = ActionStatus.FINISHED
 
+    def _trim_instant_states(self) -> None:
+        """3.0: keep at most INSTANT_STATES_MAX instant action states (oldest finished go)."""
+        instant = [k for k, r in self._runs.items() if r.node_key is None]
+        excess = len(instant) - INSTANT_STATES_MAX
+        for key in instant:
+            if excess <= 0:
+                break
+            if self._runs[key].terminal:
+                del self._runs[key]
+                excess -= 1
+
     def _cancel(self, run: ActionRun) -> None:
         vehicle = self._vehicle
-        if not vehicle.has_order:
+        named = action_params(run.action).get("orderId") if vehicle.config.major >= 3 else None
+        if not vehicle.has_order or (named is not None and named != vehicle.order_id):
             run.fail("no order to cancel")
             vehicle.add_no_order_to_cancel(run.action_id)
             return
@@ -240,6 +286,8 @@ class ActionExecutor:
             vehicle.charging = False
         elif kind == "initPosition":
             return self._init_position(params)
+        elif kind == "detectObject":
+            pass  # nothing to detect in a simulation; it just takes its time
         else:
             return f"actionType {kind!r} has no effect in the simulator"
         vehicle.mark_state_due()

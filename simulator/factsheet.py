@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from simulator.actions import CATALOGUE
+from simulator.actions import CATALOGUE, catalogue
 from vda5050 import (
     ActionParameterSpec,
     AgvAction,
@@ -24,7 +24,14 @@ from vda5050 import (
     VehicleConfig,
     VersionInfo,
 )
-from vda5050.enums import AgvClass, AgvKinematic, LocalizationType, NavigationType, Support
+from vda5050.enums import (
+    AgvClass,
+    AgvKinematic,
+    BlockingType,
+    LocalizationType,
+    NavigationType,
+    Support,
+)
 
 #: Vehicle footprint in metres; the envelope is the rectangle around the kinematic centre.
 LENGTH = 1.2
@@ -59,9 +66,9 @@ def _agv_actions() -> list[AgvAction]:
                 for p in spec.parameters
             ]
             or None,
-            blocking_types=list(spec.blocking_types),
+            blocking_types=[BlockingType(b) for b in spec.blocking_types],
         )
-        for spec in CATALOGUE.values()
+        for spec in catalogue(2)
     ]
 
 

@@ -31,6 +31,7 @@ from vda5050.enums import (
     TopicKind,
 )
 from vda5050.headers import HeaderFields
+from vda5050.versions import major_of
 
 if TYPE_CHECKING:
     from simulator.vehicle import VirtualVehicle
@@ -43,8 +44,9 @@ def _header(vehicle: VirtualVehicle, kind: TopicKind) -> HeaderFields:
 
 
 def is_v21(version: str) -> bool:
-    """True for protocol 2.1.x, which adds ``state.maps`` and ``factsheet.vehicleConfig``."""
-    return version.startswith("2.1")
+    """True for protocol 2.1.x and later (3.x), which have ``state.maps`` and the vehicle
+    configuration in the factsheet."""
+    return version.startswith("2.1") or major_of(version) >= 3
 
 
 def agv_position(vehicle: VirtualVehicle) -> AgvPosition:

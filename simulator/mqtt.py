@@ -1,7 +1,9 @@
 """MQTT wiring of one virtual vehicle: its own paho client, last will and publishing.
 
-One client per vehicle is deliberate: the last will (CONNECTIONBROKEN) is per MQTT
-connection, so vehicles sharing a client could not report their connection separately.
+One client per vehicle is deliberate: the last will (CONNECTIONBROKEN, 3.0
+CONNECTION_BROKEN) is per MQTT connection, so vehicles sharing a client could not report
+their connection separately. Messages go through :mod:`simulator.wire`, which speaks the
+vehicle's protocol version (topics ``.../v2/...`` or ``.../v3/...``).
 paho runs each client's network loop in its own thread; every callback is wrapped so an
 exception is logged instead of killing that thread.
 """
@@ -21,8 +23,9 @@ import paho.mqtt.client as mqtt
 from paho.mqtt.enums import CallbackAPIVersion
 from paho.mqtt.reasoncodes import ReasonCode
 
+from simulator import wire
 from simulator.vehicle import VirtualVehicle
-from vda5050 import DecodeError, InstantActions, Order, Topic, decode, encode, major_version_of
+from vda5050 import DecodeError, InstantActions, Order, Topic, encode, major_version_of
 from vda5050.enums import ConnectionState, TopicKind
 
 log = logging.getLogger(__name__)
@@ -98,7 +101,7 @@ class VehicleLink:
         if broker.username is not None:
             self.client.username_pw_set(broker.username, broker.password)
         with self.lock:
-            will = encode(vehicle.build_connection(ConnectionState.CONNECTIONBROKEN))
+            will = encode(wire.connection(vehicle, ConnectionState.CONNECTIONBROKEN))
         self.client.will_set(self.topic(TopicKind.CONNECTION), will, qos=1, retain=True)
         self.client.reconnect_delay_set(*RECONNECT_DELAY)
         self.client.on_connect = _guarded("connect", self._on_connect)
@@ -120,7 +123,7 @@ class VehicleLink:
         """Graceful stop: publish OFFLINE (retained), then DISCONNECT so no will is sent."""
         if self.client.is_connected():
             with self.lock:
-                offline = encode(self.vehicle.build_connection(ConnectionState.OFFLINE))
+                offline = encode(wire.connection(self.vehicle, ConnectionState.OFFLINE))
             info = self.client.publish(
                 self.topic(TopicKind.CONNECTION), offline, qos=1, retain=True
             )
@@ -165,8 +168,8 @@ class VehicleLink:
         client.reconnect_delay_set(*RECONNECT_DELAY)  # undo a scripted longer outage
         client.subscribe([(topic, 0) for topic in self._inbound])
         with self.lock:
-            online = encode(self.vehicle.build_connection(ConnectionState.ONLINE))
-            factsheet = encode(self.vehicle.build_factsheet())
+            online = encode(wire.connection(self.vehicle, ConnectionState.ONLINE))
+            factsheet = encode(wire.factsheet(self.vehicle))
             self.vehicle.take_factsheet_due()
             self.vehicle.mark_state_due()
         # Factsheet first: once the broker acknowledges ONLINE it has processed the
@@ -207,7 +210,7 @@ class VehicleLink:
             return
         serial = self.vehicle.config.serial_number
         try:
-            message = decode(kind, msg.payload, version=self._version)
+            message = wire.decode_inbound(kind, msg.payload, self._version)
         except DecodeError as exc:
             log.warning("%s: undecodable %s: %s", serial, kind, exc)
             if kind is TopicKind.ORDER:
@@ -239,9 +242,9 @@ class VehicleLink:
         with self.lock:
             silent = self.silent or self.vehicle.silent
             if self.vehicle.take_state_due() and not silent:
-                states = [encode(state) for state in self.vehicle.build_states()]
+                states = [encode(state) for state in wire.states(self.vehicle)]
             if self.vehicle.take_factsheet_due():
-                factsheet = encode(self.vehicle.build_factsheet())
+                factsheet = encode(wire.factsheet(self.vehicle))
         if factsheet is not None:
             self.client.publish(self.topic(TopicKind.FACTSHEET), factsheet, qos=0, retain=True)
         for payload in states:
@@ -273,5 +276,5 @@ class VehicleLink:
             behind = now - self._last_visualization >= 2 * period
             self._last_visualization = now if behind else self._last_visualization + period
             with self.lock:
-                payload = encode(self.vehicle.build_visualization())
+                payload = encode(wire.visualization(self.vehicle))
             self.client.publish(self.topic(TopicKind.VISUALIZATION), payload, qos=0)

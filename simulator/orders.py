@@ -1,7 +1,8 @@
 """Order validation as a vehicle performs it (REFERENCE §3 A–C seen from the AGV side).
 
-Every check raises :class:`OrderRejected` carrying the 2.x error type the vehicle reports,
-so the state machine only has to turn the exception into a WARNING error.
+Every check raises :class:`OrderRejected` carrying the 2.x error type the vehicle reports
+and, where 3.0 names the case more precisely than its default mapping, the 3.0 error type
+(REFERENCE §3 C.18), so the state machine only has to turn the exception into a WARNING error.
 """
 
 from __future__ import annotations
@@ -11,19 +12,24 @@ from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 
 from simulator.actions import check_action
-from vda5050 import Action, Edge, Node, Order
+from vda5050 import Action, Edge, Node, Order, v3
 from vda5050.enums import ActionScope, ErrorType
 
 Point = tuple[float, float]
 
 
 class OrderRejected(Exception):
-    """An order (or update) the vehicle refuses; ``error_type`` goes into ``state.errors``."""
+    """An order (or update) the vehicle refuses; ``error_type`` goes into ``state.errors``.
 
-    def __init__(self, error_type: str, description: str) -> None:
+    ``v3_type`` is the 3.0 error type when it is more specific than the default mapping of
+    ``error_type`` (:data:`simulator.wire.V3_ERROR_TYPES`).
+    """
+
+    def __init__(self, error_type: str, description: str, v3_type: str | None = None) -> None:
         super().__init__(description)
         self.error_type = error_type
         self.description = description
+        self.v3_type = v3_type
 
 
 @dataclass(slots=True)
@@ -90,7 +96,11 @@ def resolve_targets(
         pos = node.node_position
         if pos is not None:
             if pos.map_id not in maps:
-                raise _invalid(f"node {node.node_id!r} is on unknown map {pos.map_id!r}")
+                raise OrderRejected(
+                    ErrorType.VALIDATION_ERROR,
+                    f"node {node.node_id!r} is on unknown map {pos.map_id!r}",
+                    v3.ErrorType.UNKNOWN_MAP_ID,
+                )
             if not (math.isfinite(pos.x) and math.isfinite(pos.y)):
                 raise _invalid(f"node {node.node_id!r} has a non-finite position")
             targets.append((pos.x, pos.y))
@@ -101,8 +111,9 @@ def resolve_targets(
     return targets
 
 
-def check_actions(order: Order, *, skip_first_node: bool) -> None:
-    """Every action must be in the catalogue for its scope and ids must be unique.
+def check_actions(order: Order, *, skip_first_node: bool, major: int = 2) -> None:
+    """Every action must be in the catalogue (of protocol ``major``) for its scope and ids
+    must be unique.
 
     ``skip_first_node``: the stitching node of an update keeps its first-sent content
     (2.1 §6.6.2), so its actions are neither validated nor executed again.
@@ -115,7 +126,7 @@ def check_actions(order: Order, *, skip_first_node: bool) -> None:
         scoped += [(ActionScope.EDGE, action) for action in edge.actions]
     seen: set[str] = set()
     for scope, action in scoped:
-        problem = check_action(action, scope)
+        problem = check_action(action, scope, major)
         if problem is None and action.action_id in seen:
             problem = f"duplicate actionId {action.action_id!r}"
         if problem is not None:
@@ -135,8 +146,10 @@ def check_start(
         allowed = max(reach, first.node_position.allowed_deviation_xy)
     distance = math.dist(target, position)
     if distance > allowed:
-        raise _invalid(
-            f"first node {first.node_id!r} is {distance:.2f} m away (allowed {allowed:.2f} m)"
+        raise OrderRejected(
+            ErrorType.VALIDATION_ERROR,
+            f"first node {first.node_id!r} is {distance:.2f} m away (allowed {allowed:.2f} m)",
+            v3.ErrorType.START_NODE_OUT_OF_RANGE,
         )
 
 

@@ -10,12 +10,12 @@ from __future__ import annotations
 import logging
 import random
 from datetime import UTC, datetime, timedelta
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 import msgspec
 
 from simulator.misbehaviour import Misbehaviour
-from vda5050 import Order, State
+from vda5050 import Order, State, v3
 from vda5050.enums import OperatingMode
 from vda5050.headers import format_timestamp
 
@@ -25,6 +25,9 @@ if TYPE_CHECKING:
 log = logging.getLogger("simulator.misbehaviour")
 
 _EPS = 1e-6
+
+#: A state message of either protocol version (shaped alike: header, timestamp).
+S = TypeVar("S", State, v3.State)
 
 
 def _take(budget: int | None) -> tuple[bool, int | None]:
@@ -50,7 +53,7 @@ class Saboteur:
         self._drops = plan.drop_orders
         self._failures = plan.fail_count
         self._deferred: list[tuple[float, Order]] = []
-        self._held: State | None = None
+        self._held: State | v3.State | None = None
         self._nodes = 0
         self._fatal_fired = False
         self._silence = (
@@ -211,8 +214,11 @@ class Saboteur:
         return request
 
     # ------------------------------------------------------------------ states
-    def shape_states(self, state: State) -> list[State]:
-        """The states to publish for one built state: held back, stale, duplicated."""
+    def shape_states(self, state: S) -> list[S]:
+        """The states to publish for one built state: held back, stale, duplicated.
+
+        A vehicle builds states of one version only, so a held state has the same type.
+        """
         plan = self.plan
         if self._held is None and self._chance(plan.reorder_states):
             self._held = state
@@ -227,11 +233,10 @@ class Saboteur:
         if self._chance(plan.duplicate_states):
             out.append(state)
             self._fired("duplicate_states: state %d sent twice", state.header_id)
-        if self._held is not None:
-            self._fired(
-                "reorder_states: state %d sent after %d", self._held.header_id, state.header_id
-            )
-            out.append(self._held)
+        held = self._held
+        if isinstance(held, type(state)):
+            self._fired("reorder_states: state %d sent after %d", held.header_id, state.header_id)
+            out.append(held)
             self._held = None
         return out
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
 
-from simulator import intake, messages
+from simulator import intake, messages, wire
+from simulator.config import StartPose, VehicleConfig, normalize_angle
 from simulator.execution import ActionExecutor
 from simulator.misbehaviour import Misbehaviour
 from simulator.orders import Point, Step
@@ -31,48 +31,14 @@ from vda5050 import (
 from vda5050.enums import ConnectionState, ErrorLevel, ErrorType, OperatingMode
 from vda5050.headers import HeaderCounter
 
+__all__ = ["StartPose", "VehicleConfig", "VirtualVehicle", "normalize_angle"]
+
 log = logging.getLogger(__name__)
 
 _EPS = 1e-6
 # Rejection errors are kept until the next accepted order; cap them so a master that
 # keeps resending a bad order cannot grow the state message without bound.
 _MAX_ORDER_ERRORS = 10
-
-
-@dataclass(frozen=True, slots=True)
-class VehicleConfig:
-    """Static parameters of one simulated vehicle (speeds in m/s, battery in %)."""
-
-    serial_number: str = "AGV-1"
-    manufacturer: str = "sim"
-    version: str = "2.0.0"
-    speed: float = 1.0
-    time_scale: float = 1.0
-    start_reach: float = 0.5
-    state_interval: float = 30.0
-    visualization_hz: float = 1.0
-    battery_start: float = 100.0
-    battery_drain_per_metre: float = 0.05
-    battery_idle_drain_per_second: float = 0.002
-    battery_charge_per_second: float = 1.0
-    map_version: str = "1"
-    misbehaviour: Misbehaviour = Misbehaviour()
-
-
-@dataclass(frozen=True, slots=True)
-class StartPose:
-    """Where a vehicle boots: on ``node_id`` of ``map_id`` at (x, y, theta)."""
-
-    map_id: str
-    node_id: str
-    x: float
-    y: float
-    theta: float = 0.0
-
-
-def normalize_angle(theta: float) -> float:
-    """Wrap an angle to [-pi, pi] as the protocol requires."""
-    return math.atan2(math.sin(theta), math.cos(theta))
 
 
 class VirtualVehicle:
@@ -94,6 +60,7 @@ class VirtualVehicle:
         self.position_initialized = True
         self.order_id = ""
         self.order_update_id = 0
+        self.last_order: Order | None = None  # latest accepted order message (3.0 resends)
         self.last_node_id = start.node_id
         self.last_node_sequence_id = 0
         self.pending: list[Step] = []
@@ -155,8 +122,15 @@ class VirtualVehicle:
 
     def reject_undecodable(self, reason: str) -> None:
         """An order payload that does not even decode is a validationError too."""
-        self.add_order_error(ErrorType.VALIDATION_ERROR, reason, [])
+        self.add_order_error(self.error_type(ErrorType.VALIDATION_ERROR), reason, [])
         self.mark_state_due()
+
+    def error_type(self, error_type: str, v3_type: str | None = None) -> str:
+        """The errorType to report: ``error_type`` (2.x) or, for a 3.0 vehicle, ``v3_type``
+        or the 3.0 name of ``error_type`` (REFERENCE §3 C.18)."""
+        if self.config.major < 3:
+            return error_type
+        return v3_type or wire.V3_ERROR_TYPES.get(error_type, error_type)
 
     def add_order_error(self, error_type: str, text: str, refs: list[ErrorReference]) -> None:
         """Report a WARNING order error until the next accepted order (capped list)."""
@@ -178,10 +152,15 @@ class VirtualVehicle:
     def add_no_order_to_cancel(self, action_id: str) -> None:
         """cancelOrder without an active order (REFERENCE §3 D.20)."""
         self.add_order_error(
-            ErrorType.NO_ORDER_TO_CANCEL,
+            self.error_type(ErrorType.NO_ORDER_TO_CANCEL),
             "cancelOrder received but there is no order to cancel",
             [ErrorReference(reference_key="actionId", reference_value=action_id)],
         )
+
+    def add_invalid_instant_action(self, action_id: str, reason: str) -> None:
+        """3.0: an instant action that cannot be executed is INVALID_INSTANT_ACTION."""
+        refs = [ErrorReference(reference_key="actionId", reference_value=action_id)]
+        self.add_order_error("INVALID_INSTANT_ACTION", reason, refs)
 
     def cancel_order(self) -> None:
         """Drop everything after the node we are heading to (or all, if on a node)."""

@@ -1,13 +1,16 @@
-"""Framework-free VDA 5050 (2.0.0 / 2.1.0) protocol library.
+"""Framework-free VDA 5050 protocol library: 2.0.0 / 2.1.0, 3.0.0, and 1.1 on input.
 
 Message Structs, enums, topics, headers/timestamps, a hardened JSON codec and small
-builders. This package must never import Django, Celery, Channels or any project app
-(enforced by an import-linter contract): it is shared by master control, the simulator
-and tests.
+builders. The names exported here are the 2.x ones; the 3.0 Structs and enums live in
+:mod:`vda5050.v3` (``decode(kind, payload, version="3.0.0")`` returns them) and
+:mod:`vda5050.adapt` converts between the versions. This package must never import
+Django, Celery, Channels or any project app (enforced by an import-linter contract): it is
+shared by master control, the simulator and tests.
 """
 
 from __future__ import annotations
 
+from vda5050 import adapt, v3
 from vda5050.builders import (
     action_params,
     cancel_order,
@@ -23,6 +26,7 @@ from vda5050.builders import (
 )
 from vda5050.codec import (
     MAX_PAYLOAD_BYTES,
+    AnyMessage,
     Payload,
     decode,
     encode,
@@ -68,6 +72,7 @@ from vda5050.headers import (
 )
 from vda5050.topics import (
     Topic,
+    kinds_of,
     parse_kind,
     subscription,
 )
@@ -153,6 +158,7 @@ __all__ = [
     "AgvGeometry",
     "AgvKinematic",
     "AgvPosition",
+    "AnyMessage",
     "BatteryState",
     "BlockingType",
     "BoundingBoxReference",
@@ -228,6 +234,7 @@ __all__ = [
     "WheelPosition",
     "WheelType",
     "action_params",
+    "adapt",
     "cancel_order",
     "decode",
     "encode",
@@ -235,6 +242,7 @@ __all__ = [
     "format_timestamp",
     "init_position",
     "instant_action",
+    "kinds_of",
     "major_of",
     "major_version_of",
     "make_action",
@@ -248,4 +256,5 @@ __all__ = [
     "state_request",
     "stop_pause",
     "subscription",
+    "v3",
 ]

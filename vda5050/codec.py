@@ -1,8 +1,10 @@
-"""JSON encoding and decoding of VDA 5050 2.x messages.
+"""JSON encoding and decoding of VDA 5050 messages (1.1 leniently, 2.0, 2.1, 3.0).
 
 ``decode`` is the trust boundary for everything arriving over MQTT: whatever the payload,
 it returns a typed Struct or raises :class:`~vda5050.errors.DecodeError`, never anything
-else, so one bad vehicle cannot crash a subscriber loop.
+else, so one bad vehicle cannot crash a subscriber loop. The ``version`` selects the Struct
+set: 2.x → :mod:`vda5050.v2`, 3.x → :mod:`vda5050.v3`, 1.x → the 2.x Structs after
+:func:`vda5050.lenient.normalise_v1` (lower-case enums, ``informations``).
 
 NaN/Infinity: msgspec's JSON parser already rejects the ``NaN``/``Infinity`` tokens and
 numbers that overflow a float (``1e400`` → "Number out of range"), so decoded messages
@@ -14,13 +16,16 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 from typing import Any, Literal, overload
 
 import msgspec
 
+from vda5050 import v3
 from vda5050.enums import TopicKind
 from vda5050.errors import DecodeError, EncodeError, TopicError, VersionError
-from vda5050.topics import parse_kind
+from vda5050.lenient import normalise_v1
+from vda5050.topics import kinds_of, parse_kind
 from vda5050.v2 import (
     MESSAGE_TYPES,
     Connection,
@@ -33,7 +38,10 @@ from vda5050.v2 import (
 )
 from vda5050.versions import SUPPORTED_MAJORS, major_of
 
-__all__ = ["MAX_PAYLOAD_BYTES", "Payload", "decode", "encode"]
+__all__ = ["MAX_PAYLOAD_BYTES", "AnyMessage", "Payload", "decode", "encode"]
+
+#: A top-level message of any supported version (what :func:`decode` may return).
+AnyMessage = Message | v3.Message
 
 #: Largest payload :func:`decode` accepts, checked before parsing (memory/CPU bound for
 #: hostile input). Read at call time, so tests and deployments may change it.
@@ -45,6 +53,10 @@ Payload = bytes | bytearray | memoryview | str
 _DECODERS: dict[TopicKind, msgspec.json.Decoder[Any]] = {
     kind: msgspec.json.Decoder(type_) for kind, type_ in MESSAGE_TYPES.items()
 }
+_DECODERS_V3: dict[TopicKind, msgspec.json.Decoder[Any]] = {
+    kind: msgspec.json.Decoder(type_) for kind, type_ in v3.MESSAGE_TYPES.items()
+}
+_UNTYPED = msgspec.json.Decoder()
 _ENCODER = msgspec.json.Encoder()
 
 # msgspec validation messages end with " - at `$.nodes[2].nodeId`" when tied to an element.
@@ -71,6 +83,73 @@ def encode(message: msgspec.Struct) -> bytes:
         raise EncodeError("value nested too deeply") from None
 
 
+# The 3.0 overloads come first: a literal "3.0.0" selects the v3 Struct. mypy calls them
+# unsafe because a plain ``str`` version could also be "3.0.0" at runtime; such calls get
+# the 2.x type from the overloads below, which is right for every 2.x version.
+@overload
+def decode(  # type: ignore[overload-overlap]
+    kind: Literal[TopicKind.ORDER],
+    payload: Payload,
+    *,
+    version: Literal["3.0.0"],
+    max_payload_bytes: int | None = ...,
+) -> v3.Order: ...
+@overload
+def decode(  # type: ignore[overload-overlap]
+    kind: Literal[TopicKind.INSTANT_ACTIONS],
+    payload: Payload,
+    *,
+    version: Literal["3.0.0"],
+    max_payload_bytes: int | None = ...,
+) -> v3.InstantActions: ...
+@overload
+def decode(  # type: ignore[overload-overlap]
+    kind: Literal[TopicKind.STATE],
+    payload: Payload,
+    *,
+    version: Literal["3.0.0"],
+    max_payload_bytes: int | None = ...,
+) -> v3.State: ...
+@overload
+def decode(  # type: ignore[overload-overlap]
+    kind: Literal[TopicKind.VISUALIZATION],
+    payload: Payload,
+    *,
+    version: Literal["3.0.0"],
+    max_payload_bytes: int | None = ...,
+) -> v3.Visualization: ...
+@overload
+def decode(  # type: ignore[overload-overlap]
+    kind: Literal[TopicKind.CONNECTION],
+    payload: Payload,
+    *,
+    version: Literal["3.0.0"],
+    max_payload_bytes: int | None = ...,
+) -> v3.Connection: ...
+@overload
+def decode(  # type: ignore[overload-overlap]
+    kind: Literal[TopicKind.FACTSHEET],
+    payload: Payload,
+    *,
+    version: Literal["3.0.0"],
+    max_payload_bytes: int | None = ...,
+) -> v3.Factsheet: ...
+@overload
+def decode(
+    kind: Literal[TopicKind.ZONE_SET],
+    payload: Payload,
+    *,
+    version: Literal["3.0.0"],
+    max_payload_bytes: int | None = ...,
+) -> v3.ZoneSet: ...
+@overload
+def decode(
+    kind: Literal[TopicKind.RESPONSES],
+    payload: Payload,
+    *,
+    version: Literal["3.0.0"],
+    max_payload_bytes: int | None = ...,
+) -> v3.Responses: ...
 @overload
 def decode(
     kind: Literal[TopicKind.ORDER],
@@ -126,7 +205,7 @@ def decode(
     *,
     version: str = ...,
     max_payload_bytes: int | None = ...,
-) -> Message: ...
+) -> AnyMessage: ...
 
 
 def decode(
@@ -135,61 +214,83 @@ def decode(
     *,
     version: str = "2.0.0",
     max_payload_bytes: int | None = None,
-) -> Message:
+) -> AnyMessage:
     """Decode ``payload`` as a message of topic ``kind``.
 
     Args:
         kind: topic kind (``TopicKind.STATE`` or ``"state"``); selects the Struct type.
         payload: raw MQTT payload (UTF-8 JSON).
-        version: protocol version the vehicle speaks; only 2.x is supported (2.0.0 and
-            2.1.0 share one Struct set, unknown fields are ignored).
+        version: protocol version the vehicle speaks. 2.x (2.0.0 and 2.1.0 share one
+            Struct set) returns :mod:`vda5050.v2` Structs, 3.x the :mod:`vda5050.v3`
+            Structs of all eight topics, 1.x (no factsheet) the 2.x Structs after
+            upper-casing known enum values. Unknown fields are ignored.
         max_payload_bytes: size limit, default :data:`MAX_PAYLOAD_BYTES`.
 
     Raises:
-        DecodeError: for any problem: unknown kind or version, oversized, non-UTF-8,
-            malformed or too deeply nested JSON, NaN/Infinity/overflowing numbers, wrong
-            types, missing required fields or out-of-range values.
+        DecodeError: for any problem: unknown kind (or one the version does not have) or
+            unsupported version, oversized, non-UTF-8, malformed or too deeply nested JSON,
+            NaN/Infinity/overflowing numbers, wrong types, missing required fields or
+            out-of-range values.
     """
     topic_kind = _kind_or_error(kind)
-    _check_version(topic_kind, version)
+    major = _major_or_error(topic_kind, version)
+    if topic_kind not in kinds_of(major) or (major == 1 and topic_kind is TopicKind.FACTSHEET):
+        raise DecodeError(topic_kind, f"unknown topic kind for protocol version {version!r}")
     data = _checked_bytes(topic_kind, payload, max_payload_bytes)
-    try:
-        result: Message = _DECODERS[topic_kind].decode(data)
-    except msgspec.ValidationError as exc:
-        match = _PATH_RE.match(str(exc))
-        if match is None:
-            raise DecodeError(topic_kind, str(exc)) from None
-        raise DecodeError(topic_kind, match["reason"], match["path"]) from None
-    except msgspec.DecodeError as exc:
-        # msgspec's own wording is already specific ("JSON is malformed: invalid character
-        # (byte 5)", "Input data was truncated").
-        raise DecodeError(topic_kind, str(exc)) from None
-    except RecursionError:
-        # msgspec recurses per nesting level; ~1000 levels exhaust the interpreter limit.
-        raise DecodeError(topic_kind, "JSON nested too deeply") from None
-    except Exception as exc:
-        # Last line of the trust boundary: no input may crash the caller with an
-        # exception type it does not expect (the specific cases above cover all we know).
-        raise DecodeError(topic_kind, f"{type(exc).__name__}: {exc}") from None
+    if major == 1:
+        legacy: Message = _guarded(topic_kind, lambda: _decode_v1(topic_kind, data))
+        return legacy
+    decoder = _DECODERS_V3[topic_kind] if major >= 3 else _DECODERS[topic_kind]
+    result: AnyMessage = _guarded(topic_kind, lambda: decoder.decode(data))
     return result
 
 
-def _kind_or_error(kind: object) -> TopicKind:
-    """Return ``kind`` as :class:`TopicKind` or raise :class:`DecodeError`."""
+def _decode_v1(kind: TopicKind, data: bytes | memoryview) -> Message:
+    """1.1: parse untyped, normalise to the 2.x shape, convert into the 2.x Struct."""
+    document = normalise_v1(kind, _UNTYPED.decode(data))
+    result: Message = msgspec.convert(document, MESSAGE_TYPES[kind])
+    return result
+
+
+def _guarded(kind: TopicKind, run: Callable[[], Any]) -> Any:
+    """Run a msgspec decode/convert and turn every failure into :class:`DecodeError`."""
     try:
-        return parse_kind(kind)
+        return run()
+    except msgspec.ValidationError as exc:
+        match = _PATH_RE.match(str(exc))
+        if match is None:
+            raise DecodeError(kind, str(exc)) from None
+        raise DecodeError(kind, match["reason"], match["path"]) from None
+    except msgspec.DecodeError as exc:
+        # msgspec's own wording is already specific ("JSON is malformed: invalid character
+        # (byte 5)", "Input data was truncated").
+        raise DecodeError(kind, str(exc)) from None
+    except RecursionError:
+        # msgspec recurses per nesting level; ~1000 levels exhaust the interpreter limit.
+        raise DecodeError(kind, "JSON nested too deeply") from None
+    except Exception as exc:
+        # Last line of the trust boundary: no input may crash the caller with an
+        # exception type it does not expect (the specific cases above cover all we know).
+        raise DecodeError(kind, f"{type(exc).__name__}: {exc}") from None
+
+
+def _kind_or_error(kind: object) -> TopicKind:
+    """Return ``kind`` as :class:`TopicKind` (of any version) or raise :class:`DecodeError`."""
+    try:
+        return parse_kind(kind, None)
     except TopicError:
         raise DecodeError(str(kind), "unknown topic kind") from None
 
 
-def _check_version(kind: TopicKind, version: str) -> None:
-    """Raise :class:`DecodeError` unless ``version`` is a supported protocol version."""
+def _major_or_error(kind: TopicKind, version: str) -> int:
+    """The major version of ``version``, or :class:`DecodeError` if it is not supported."""
     try:
         major = major_of(version)
     except VersionError as exc:
         raise DecodeError(kind, str(exc)) from None
     if major not in SUPPORTED_MAJORS:
         raise DecodeError(kind, f"unsupported protocol version {version!r}")
+    return major
 
 
 def _checked_bytes(kind: TopicKind, payload: object, limit: int | None) -> bytes | memoryview:

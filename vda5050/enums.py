@@ -2,7 +2,8 @@
 
 All enums are :class:`enum.StrEnum`, so members compare equal to (and serialise as) their
 wire spelling. 2.x spells values UPPERCASE without underscores (``CONNECTIONBROKEN``,
-``TEACHIN``); 3.0 spellings are deliberately absent because 3.0 is not wire-compatible.
+``TEACHIN``); 3.0 spellings are deliberately absent because 3.0 is not wire-compatible (they
+live in :mod:`vda5050.v3.enums`). Only :class:`TopicKind` is shared by all versions.
 """
 
 from __future__ import annotations
@@ -11,7 +12,11 @@ from enum import StrEnum
 
 
 class TopicKind(StrEnum):
-    """Last level of a VDA 5050 MQTT topic, i.e. the message type."""
+    """Last level of a VDA 5050 MQTT topic, i.e. the message type.
+
+    ZONE_SET and RESPONSES exist only in 3.0; :func:`vda5050.topics.kinds_of` tells which
+    kinds a protocol major version has (2.x: the first six, 1.1: no factsheet either).
+    """
 
     ORDER = "order"
     INSTANT_ACTIONS = "instantActions"
@@ -19,6 +24,8 @@ class TopicKind(StrEnum):
     VISUALIZATION = "visualization"
     CONNECTION = "connection"
     FACTSHEET = "factsheet"
+    ZONE_SET = "zoneSet"
+    RESPONSES = "responses"
 
 
 class ProtocolVersion(StrEnum):

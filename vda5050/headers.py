@@ -52,8 +52,9 @@ class HeaderCounter:
 
     @staticmethod
     def _key(manufacturer: str, serial_number: str, kind: TopicKind | str) -> _Key:
-        # Normalising to TopicKind rejects typos such as "instantaction" early.
-        return (manufacturer, serial_number, parse_kind(kind))
+        # Normalising to TopicKind rejects typos such as "instantaction" early; every
+        # version's kinds are accepted (3.0 adds zoneSet and responses).
+        return (manufacturer, serial_number, parse_kind(kind, None))
 
     def next_id(self, manufacturer: str, serial_number: str, kind: TopicKind | str) -> int:
         """Return the headerId for the next message on this topic and advance the counter."""

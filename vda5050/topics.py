@@ -14,12 +14,29 @@ from vda5050.enums import TopicKind
 from vda5050.errors import TopicError
 from vda5050.versions import major_version_of
 
-__all__ = ["Topic", "TopicError", "major_version_of", "parse_kind", "subscription"]
+__all__ = ["Topic", "TopicError", "kinds_of", "major_version_of", "parse_kind", "subscription"]
 
 # U+0000 is forbidden anywhere in an MQTT topic name (MQTT 3.1.1 §4.7.3).
 _FORBIDDEN_CHARS = frozenset("/+#$\x00")
 _SERIAL_RE = re.compile(r"[A-Za-z0-9_.:\-]+")
+_MAJOR_LEVEL_RE = re.compile(r"v(\d{1,4})")
 _LEVELS = 5
+
+_V2_KINDS = frozenset(TopicKind) - {TopicKind.ZONE_SET, TopicKind.RESPONSES}
+_V3_KINDS = frozenset(TopicKind)
+
+
+def kinds_of(major: int) -> frozenset[TopicKind]:
+    """Topic kinds of protocol major version ``major``: from 3 on all eight (``zoneSet`` and
+    ``responses`` are new), below 3 the six 2.x kinds (1.1 never sends a factsheet, but
+    its topic level stays valid)."""
+    return _V3_KINDS if major >= 3 else _V2_KINDS
+
+
+def _level_major(major_version: str) -> int:
+    """Major version number of a topic level such as ``"v3"`` (2 if it is not ``vN``)."""
+    match = _MAJOR_LEVEL_RE.fullmatch(major_version)
+    return int(match.group(1)) if match else 2
 
 
 def _check_level(name: str, value: object) -> str:
@@ -34,17 +51,24 @@ def _check_level(name: str, value: object) -> str:
     return value
 
 
-def parse_kind(value: object) -> TopicKind:
+def parse_kind(value: object, major: int | None = 2) -> TopicKind:
     """Coerce ``value`` (e.g. ``"state"``) to a :class:`TopicKind`.
 
+    ``major`` restricts the result to the kinds of that protocol major version (default 2,
+    so ``"zoneSet"`` is rejected unless ``major=3``); ``None`` accepts every known kind.
+
     Raises:
-        TopicError: if ``value`` is not one of the six 2.x topic kinds.
+        TopicError: if ``value`` is not a topic kind of that major version.
     """
     if isinstance(value, str):
         try:
-            return TopicKind(value)
+            kind = TopicKind(value)
         except ValueError:
             pass
+        else:
+            if major is None or kind in kinds_of(major):
+                return kind
+            raise TopicError(f"topic kind {value!r} does not exist in protocol v{major}")
     raise TopicError(f"unknown topic kind {value!r}")
 
 
@@ -70,7 +94,8 @@ class Topic:
         if not _SERIAL_RE.fullmatch(self.serial_number):
             raise TopicError(f"serial_number {self.serial_number!r} may only contain A-Za-z0-9_.:-")
         # Frozen dataclass: object.__setattr__ is the sanctioned way to normalise in init.
-        object.__setattr__(self, "kind", parse_kind(self.kind))
+        kind = parse_kind(self.kind, _level_major(self.major_version))
+        object.__setattr__(self, "kind", kind)
 
     @classmethod
     def parse(cls, text: str) -> Topic:
@@ -94,7 +119,7 @@ class Topic:
             major_version=major_version,
             manufacturer=manufacturer,
             serial_number=serial_number,
-            kind=parse_kind(kind),
+            kind=parse_kind(kind, None),  # checked against the major version in __post_init__
         )
 
     def build(self) -> str:
@@ -123,9 +148,9 @@ def subscription(
     """Return the wildcard subscription of the master control.
 
     ``subscription("uagv")`` → ``"uagv/v2/+/+/#"`` (every topic of every vehicle);
-    with ``kind`` → ``"uagv/v2/+/+/state"``.
+    with ``kind`` → ``"uagv/v2/+/+/state"``; ``kind`` must exist in ``major_version``.
     """
     _check_level("interface_name", interface_name)
     _check_level("major_version", major_version)
-    last = "#" if kind is None else str(parse_kind(kind))
+    last = "#" if kind is None else str(parse_kind(kind, _level_major(major_version)))
     return f"{interface_name}/{major_version}/+/+/{last}"

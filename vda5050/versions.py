@@ -10,8 +10,8 @@ from vda5050.errors import VersionError
 # sloppy "2.1" from a vehicle still maps to the right major version.
 _VERSION_RE = re.compile(r"(\d{1,4})(?:\.(\d{1,4}))?(?:\.(\d{1,4}))?")
 
-#: Protocol major versions whose messages this package can decode.
-SUPPORTED_MAJORS = frozenset({2})
+#: Protocol major versions whose messages this package can decode (1 = 1.1, leniently).
+SUPPORTED_MAJORS = frozenset({1, 2, 3})
 
 
 def parse_version(version: str) -> tuple[int, int, int]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
 
+from simulator import wire
 from simulator.vehicle import StartPose, VehicleConfig, VirtualVehicle
 from vda5050 import (
     Action,
@@ -14,7 +15,11 @@ from vda5050 import (
     NodePosition,
     Order,
     State,
+    TopicKind,
+    encode,
+    v3,
 )
+from vda5050.adapt import instant_actions_v2_to_v3, order_v2_to_v3
 from vda5050.enums import ActionStatus, BlockingType
 
 MAP = "demo"
@@ -182,3 +187,52 @@ def error_types(vehicle: VirtualVehicle) -> list[str]:
 def finished(vehicle: VirtualVehicle) -> bool:
     """Order done: nothing pending, every action terminal, standing still."""
     return not vehicle.pending and vehicle.actions.all_terminal and not vehicle.driving
+
+
+# --- 3.0: messages as a 3.0 master sends them, through the vehicle's message edge ---------
+
+
+def make_order3(order_id: str, path: Sequence[str], **options: object) -> v3.Order:
+    """:func:`make_order` as a 3.0 order (same options; actions keep their blockingType)."""
+    order = make_order(order_id, path, **options)  # type: ignore[arg-type]
+    order.timestamp = "2024-01-01T00:00:00.000Z"
+    return order_v2_to_v3(order, version="3.0.0")
+
+
+def instant3(*actions: Action) -> v3.InstantActions:
+    """A 3.0 instantActions message (blockingType NONE)."""
+    message = instant(*actions)
+    message.timestamp = "2024-01-01T00:00:00.000Z"
+    return instant_actions_v2_to_v3(message, version="3.0.0")
+
+
+def send3(vehicle: VirtualVehicle, message: v3.Order | v3.InstantActions) -> bool:
+    """Deliver a 3.0 message over the wire edge (encode, decode as 3.0, convert)."""
+    kind = TopicKind.ORDER if isinstance(message, v3.Order) else TopicKind.INSTANT_ACTIONS
+    internal = wire.decode_inbound(kind, encode(message), "3.0.0")
+    if isinstance(internal, Order):
+        return vehicle.on_order(internal)
+    vehicle.on_instant_actions(internal)
+    return True
+
+
+def run3(vehicle: VirtualVehicle, seconds: float, dt: float = 0.1) -> list[v3.State]:
+    """Tick for ``seconds`` and return the 3.0 state messages that became due."""
+    states: list[v3.State] = []
+    for _ in range(round(seconds / dt)):
+        vehicle.tick(dt)
+        if vehicle.take_state_due():
+            states += wire.states(vehicle)  # type: ignore[arg-type]
+    return states
+
+
+def run3_until(
+    vehicle: VirtualVehicle, predicate: Callable[[VirtualVehicle], bool], max_seconds: float = 120.0
+) -> list[v3.State]:
+    """Tick until ``predicate`` holds, collecting 3.0 states; fail if it never does."""
+    states: list[v3.State] = []
+    for _ in range(round(max_seconds / 0.1)):
+        if predicate(vehicle):
+            return states
+        states += run3(vehicle, 0.1)
+    raise AssertionError(f"condition not reached within {max_seconds} s")

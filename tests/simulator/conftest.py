@@ -16,3 +16,11 @@ def recorder() -> Iterator[Recorder]:
     rec = Recorder(f"simtest{uuid.uuid4().hex[:10]}")
     yield rec
     rec.close(["AGV-1", "AGV-2"])
+
+
+@pytest.fixture
+def recorder3() -> Iterator[Recorder]:
+    """Like ``recorder``, for 3.0 vehicles: subscribes to ``<interface>/v3/...``."""
+    rec = Recorder(f"simtest{uuid.uuid4().hex[:10]}", major="v3")
+    yield rec
+    rec.close(["AGV-1", "AGV-2"])

@@ -55,8 +55,9 @@ class Received:
 class Recorder:
     """A master-control-like subscriber that records everything under one interface."""
 
-    def __init__(self, interface: str) -> None:
+    def __init__(self, interface: str, major: str = "v2") -> None:
         self.interface = interface
+        self.major = major
         self.messages: list[Received] = []
         self._cond = threading.Condition()
         self.client = mqtt.Client(CallbackAPIVersion.VERSION2, client_id=f"rec-{uuid.uuid4()}")
@@ -65,7 +66,7 @@ class Recorder:
         self.client.loop_start()
 
     def subscribe(self) -> None:
-        info = self.client.subscribe(f"{self.interface}/v2/+/+/#", qos=1)
+        info = self.client.subscribe(f"{self.interface}/{self.major}/+/+/#", qos=1)
         assert info[0] == mqtt.MQTT_ERR_SUCCESS
 
     def _on_message(self, _c: mqtt.Client, _u: object, msg: mqtt.MQTTMessage) -> None:
@@ -89,14 +90,14 @@ class Recorder:
                 self._cond.wait(remaining)
 
     def publish(self, serial: str, kind: str, payload: bytes) -> None:
-        self.client.publish(f"{self.interface}/v2/sim/{serial}/{kind}", payload, qos=0)
+        self.client.publish(f"{self.interface}/{self.major}/sim/{serial}/{kind}", payload, qos=0)
 
     def close(self, serials: list[str]) -> None:
         # Clear the retained connection/factsheet messages this test left on the broker.
         for serial in serials:
             for kind in ("connection", "factsheet"):
                 info = self.client.publish(
-                    f"{self.interface}/v2/sim/{serial}/{kind}", b"", qos=1, retain=True
+                    f"{self.interface}/{self.major}/sim/{serial}/{kind}", b"", qos=1, retain=True
                 )
                 info.wait_for_publish(5)
         self.client.disconnect()
@@ -104,6 +105,7 @@ class Recorder:
 
 
 def connection(serial: str, state: str) -> Callable[[Received], bool]:
+    """Predicate: a ``connection`` message of ``serial`` reporting ``state``."""
     return lambda m: (
         m.serial == serial and m.kind == "connection" and m.data["connectionState"] == state
     )

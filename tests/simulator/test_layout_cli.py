@@ -71,12 +71,18 @@ def test_cli_defaults_and_units() -> None:
     )
 
 
+def test_cli_accepts_every_version_it_speaks() -> None:
+    for version in ("2.0.0", "2.1.0", "3.0.0"):
+        args = build_parser().parse_args(["--count", "1", "--layout", "x", "--version", version])
+        assert args.version == version
+
+
 def test_cli_rejects_bad_input(tmp_path: Path) -> None:
     with pytest.raises(SystemExit) as exc:
         main(["--count", "1", "--layout", str(tmp_path / "missing.json")])
     assert exc.value.code == 2
     with pytest.raises(SystemExit):
-        main(["--count", "1", "--layout", "x.json", "--version", "3.0.0"])
+        main(["--count", "1", "--layout", "x.json", "--version", "1.1.0"])
     path = tmp_path / "layout.json"
     path.write_text(json.dumps(LAYOUT_DICT))
     with pytest.raises(SystemExit) as exc:

@@ -15,11 +15,17 @@ from jsonschema.protocols import Validator
 from vda5050 import (
     TopicKind,
 )
+from vda5050.topics import kinds_of
 
 # The official schemas live in the shared folder beside the project (CI clones it there too).
 SCHEMA_DIR = Path(__file__).resolve().parents[3] / "shared" / "vda5050" / "schemas"
 VERSIONS = ("2.0.0", "2.1.0")
-KINDS = tuple(TopicKind)
+#: The six 2.x topic kinds (3.0 adds zoneSet and responses).
+KINDS = tuple(kind for kind in TopicKind if kind in kinds_of(2))
+#: 3.0 schema folders: main = 3.0.0 + errata (preferred), and the release.
+V3_SCHEMA = "3.0.0-main"
+V3_RELEASE_SCHEMA = "3.0.0"
+KINDS_V3 = tuple(TopicKind)
 MANUFACTURER = "Acme"
 SERIAL = "AGV-001"
 TIMESTAMP = "2024-03-11T11:40:03.12Z"
@@ -45,7 +51,11 @@ def load_schema(version: str, kind: str, *, patched: bool = True) -> dict[str, A
 
 def _patch_upstream_bugs(version: str, kind: str, schema: dict[str, Any]) -> None:
     """Fix schema bugs that make document-conformant messages invalid (REFERENCE §7)."""
-    if kind != "factsheet":
+    if (version, kind) == ("2.1.0", "state"):
+        # REFERENCE §5: the 2.1 state schema omits actionStatus PAUSED (the document has it).
+        status = schema["properties"]["actionStates"]["items"]["properties"]["actionStatus"]
+        status["enum"] = [*status["enum"], "PAUSED"]
+    if kind != "factsheet" or not version.startswith("2."):
         return
     action = schema["properties"]["protocolFeatures"]["properties"]["agvActions"]["items"]
     blocking = action["properties"]["blockingTypes"]
@@ -67,6 +77,13 @@ def strictify(schema: Any) -> Any:
         result = {key: strictify(value) for key, value in schema.items()}
         if "properties" in result and "additionalProperties" not in result:
             result["additionalProperties"] = False
+            # 3.0 zones declare type-specific properties in allOf/if/then branches.
+            conditional = {
+                name: {}
+                for branch in schema.get("allOf", [])
+                for name in branch.get("then", {}).get("properties", {})
+            }
+            result["properties"] = {**conditional, **result["properties"]}
         return result
     if isinstance(schema, list):
         return [strictify(item) for item in schema]

@@ -268,12 +268,22 @@ def test_invalid_values_are_decode_errors(mutate: Any, path: str | None) -> None
 def test_unknown_kind_and_unsupported_version_are_decode_errors() -> None:
     payload = encode(make_order("2.0.0"))
     with pytest.raises(DecodeError) as info:
-        decode("zoneSet", payload)
+        decode("zoneSet", payload)  # a 3.0 topic, unknown in 2.x
     assert info.value.kind == "zoneSet"
+    with pytest.raises(DecodeError) as info:
+        decode("nonsense", payload)
+    assert info.value.kind == "nonsense"
     with pytest.raises(DecodeError, match="unsupported protocol version"):
-        decode(TopicKind.ORDER, payload, version="3.0.0")
+        decode(TopicKind.ORDER, payload, version="4.0.0")
     with pytest.raises(DecodeError, match="malformed protocol version"):
         decode(TopicKind.ORDER, payload, version="two")
+
+
+def test_a_2_x_order_is_not_a_3_0_order() -> None:
+    # 3.0 is not wire-compatible: the ellipse allowedDeviationXY rejects the 2.x number.
+    with pytest.raises(DecodeError) as info:
+        decode(TopicKind.ORDER, encode(make_order("2.0.0")), version="3.0.0")
+    assert info.value.path == "$.nodes[0].nodePosition.allowedDeviationXY"
 
 
 # --- encode -------------------------------------------------------------------------------

@@ -2,13 +2,9 @@
 
 from __future__ import annotations
 
-import enum
 import json
 import types
-import typing
-from typing import Any
 
-import msgspec
 import pytest
 
 from vda5050 import (
@@ -22,6 +18,7 @@ from vda5050.v2 import VDAStruct
 
 from .factsheet_sample import make_factsheet
 from .samples import ALL_SAMPLE_IDS, ALL_SAMPLES, make_connection, make_order, make_state
+from .schema_compare import compare, structs_in
 from .support import KINDS, VERSIONS, load_schema, validator
 
 
@@ -50,7 +47,7 @@ def test_sample_uses_only_properties_declared_by_its_version(
 @pytest.mark.parametrize("version", VERSIONS)
 def test_samples_cover_all_six_topics(version: str) -> None:
     kinds = {kind for v, kind, _ in ALL_SAMPLES if v == version}
-    assert kinds == set(TopicKind)
+    assert kinds == set(KINDS)
 
 
 def test_strict_check_rejects_2_1_fields_in_a_2_0_message() -> None:
@@ -107,81 +104,11 @@ _EXTRA_FIELDS = {
 }
 
 
-def _structs_in(tp: Any) -> list[type[msgspec.Struct]]:
-    """Struct classes inside an annotation such as ``list[Node] | None``."""
-    if isinstance(tp, type) and issubclass(tp, msgspec.Struct):
-        return [tp]
-    found: list[type[msgspec.Struct]] = []
-    for arg in typing.get_args(tp):
-        found += _structs_in(arg)
-    return found
-
-
-def _enums_in(tp: Any) -> list[type[enum.Enum]]:
-    if isinstance(tp, type) and issubclass(tp, enum.Enum):
-        return [tp]
-    found: list[type[enum.Enum]] = []
-    for arg in typing.get_args(tp):
-        found += _enums_in(arg)
-    return found
-
-
-def _resolve(schema: dict[str, Any], root: dict[str, Any]) -> dict[str, Any]:
-    ref = schema.get("$ref")
-    if ref is None:
-        return schema
-    node: Any = root
-    for part in ref.removeprefix("#/").split("/"):
-        node = node[part]
-    result: dict[str, Any] = node
-    return result
-
-
-def _object_schema(prop: dict[str, Any], root: dict[str, Any]) -> dict[str, Any]:
-    prop = _resolve(prop, root)
-    if prop.get("type") == "array":
-        return _resolve(prop["items"], root)
-    return prop
-
-
-def _compare(
-    cls: type[msgspec.Struct], schemas: list[tuple[dict[str, Any], dict[str, Any]]], where: str
-) -> list[str]:
-    """Differences between a Struct and the (version-specific) object schemas for it."""
-    problems: list[str] = []
-    fields = {f.encode_name: f for f in msgspec.structs.fields(cls)}
-    declared: set[str] = set()
-    for schema, _root in schemas:
-        declared |= set(schema.get("properties", {}))
-    missing = declared - set(fields)
-    extra = set(fields) - declared - _EXTRA_FIELDS.get(where, set())
-    if missing:
-        problems.append(f"{where}: {cls.__name__} lacks {sorted(missing)}")
-    if extra:
-        problems.append(f"{where}: {cls.__name__} has undeclared {sorted(extra)}")
-    for wire, field in fields.items():
-        relevant = [(s, r) for s, r in schemas if wire in s.get("properties", {})]
-        if field.required and any(wire not in s.get("required", []) for s, _ in relevant):
-            # A field we require but a schema version does not: valid messages would fail.
-            problems.append(f"{where}.{wire}: required in {cls.__name__}, optional in schema")
-        for sub in _structs_in(field.type):
-            subschemas = [(_object_schema(s["properties"][wire], r), r) for s, r in relevant]
-            problems += _compare(sub, subschemas, f"{where}.{wire}")
-        for enum_cls in _enums_in(field.type):
-            allowed: set[str] = set()
-            for s, r in relevant:
-                prop = _resolve(s["properties"][wire], r)
-                allowed |= set(prop.get("enum") or prop.get("items", {}).get("enum") or [])
-            values = {member.value for member in enum_cls}
-            if allowed and allowed != values:
-                problems.append(f"{where}.{wire}: {enum_cls.__name__} {values} != {allowed}")
-    return problems
-
-
 @pytest.mark.parametrize("kind", KINDS)
 def test_struct_fields_match_schema_properties(kind: TopicKind) -> None:
     roots = [load_schema(version, kind) for version in VERSIONS]
-    problems = _compare(MESSAGE_TYPES[kind], [(root, root) for root in roots], str(kind))
+    schemas = [(root, root) for root in roots]
+    problems = compare(MESSAGE_TYPES[kind], schemas, str(kind), _EXTRA_FIELDS)
     assert problems == []
 
 
@@ -192,7 +119,7 @@ def test_schema_comparison_detects_differences() -> None:
         surplus: int
 
     root = load_schema("2.0.0", "connection")
-    problems = _compare(Broken, [(root, root)], "connection")
+    problems = compare(Broken, [(root, root)], "connection")
     assert any("lacks" in p and "headerId" in p for p in problems)
     assert any("undeclared" in p and "surplus" in p for p in problems)
 
@@ -200,5 +127,5 @@ def test_schema_comparison_detects_differences() -> None:
 def test_union_helper_sees_through_optional_lists() -> None:
     from vda5050 import Node
 
-    assert _structs_in(list[Node] | None) == [Node]
-    assert _structs_in(types.NoneType) == []
+    assert structs_in(list[Node] | None) == [Node]
+    assert structs_in(types.NoneType) == []

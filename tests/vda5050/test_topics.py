@@ -13,15 +13,18 @@ from vda5050 import (
     major_version_of,
     subscription,
 )
+from vda5050.topics import kinds_of
+
+_CASES = [("v2", kind) for kind in kinds_of(2)] + [("v3", kind) for kind in TopicKind]
 
 
-@pytest.mark.parametrize("kind", list(TopicKind))
-def test_parse_and_build_round_trip(kind: TopicKind) -> None:
-    text = f"uagv/v2/Acme/AGV-001/{kind}"
+@pytest.mark.parametrize(("major", "kind"), _CASES, ids=[f"{m}-{k}" for m, k in _CASES])
+def test_parse_and_build_round_trip(major: str, kind: TopicKind) -> None:
+    text = f"uagv/{major}/Acme/AGV-001/{kind}"
     topic = Topic.parse(text)
     assert topic == Topic(
         interface_name="uagv",
-        major_version="v2",
+        major_version=major,
         manufacturer="Acme",
         serial_number="AGV-001",
         kind=kind,
@@ -39,6 +42,8 @@ def test_topic_kind_wire_spelling() -> None:
         "visualization",
         "connection",
         "factsheet",
+        "zoneSet",
+        "responses",
     ]
 
 
