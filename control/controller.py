@@ -24,6 +24,7 @@ from control.live import Fleet, InstantActionTrack, LiveVehicle
 from control.ports import ActiveOrder, FlushBatch, Store
 from control.publisher import Publish, Publisher
 from control.session import Verdict
+from control.versions import to_model, wire_version
 from vda5050 import DecodeError, decode
 from vda5050.enums import TopicKind
 from vda5050.topics import Topic, TopicError
@@ -102,8 +103,9 @@ class Controller:
             # Only a valid message registers a vehicle: garbage on made-up serial numbers
             # must not fill the registry.
             known = self.fleet.vehicles.get((topic.manufacturer, topic.serial_number))
+            version = wire_version(topic.major_version, known.version if known else None)
             try:
-                message = decode(topic.kind, payload, version=known.version if known else "2.0.0")
+                message = to_model(topic.kind, decode(topic.kind, payload, version=version))
             except DecodeError as exc:
                 self._reject("decode_errors", topic_text, exc, known)
                 return

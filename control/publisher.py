@@ -8,6 +8,7 @@ import msgspec
 
 import vda5050
 from control.live import LiveVehicle
+from control.versions import to_wire
 from vda5050 import encode
 from vda5050.enums import TopicKind
 from vda5050.headers import HeaderCounter, HeaderFields
@@ -76,7 +77,8 @@ class Publisher:
 
 
 def _encode_for(vehicle: LiveVehicle, kind: TopicKind, message: Any) -> bytes:
-    """The message as this vehicle's stack expects it (docs/DIALECTS.md)."""
+    """The message as this vehicle's version and stack expect it (docs/DIALECTS.md)."""
+    message = to_wire(kind, message, vehicle.version)
     if kind == TopicKind.INSTANT_ACTIONS and vehicle.dialect == "INSTANT_ACTIONS_KEY":
         data = msgspec.json.decode(encode(message))  # encode validates (no NaN, …)
         data["instantActions"] = data.pop("actions")

@@ -127,7 +127,15 @@ def state(
             x=0.0, y=0.0, theta=0.0, map_id="demo", position_initialized=localized
         ),
     )
+    if PROTOCOL["version"].startswith("3."):
+        return vda5050.encode(vda5050.adapt.state_v2_to_v3(message))  # what a 3.0 robot sends
     return vda5050.encode(message)
+
+
+def topic(serial: str = "AGV-1", kind: str = "state", manufacturer: str = "sim") -> str:
+    """The topic of the fake vehicle's version."""
+    major = vda5050.major_version_of(PROTOCOL["version"])
+    return f"uagv/{major}/{manufacturer}/{serial}/{kind}"
 
 
 ROUTE = ["a", "b", "c", "d"]

@@ -7,7 +7,7 @@ from control.capabilities import Capabilities
 from control.controller import Controller
 from control.execution import Phase
 from tests.control import fakes
-from tests.control.fakes import FakeStore, order, state
+from tests.control.fakes import FakeStore, order, state, topic
 from tests.vda5050.support import validator
 
 STATE_TOPIC = "uagv/v2/sim/AGV-1/state"
@@ -21,13 +21,16 @@ def instant_actions_in(sent: list[tuple[str, dict]]) -> list[str]:
     return [a["actionType"] for t, m in sent if t.endswith("/instantActions") for a in m["actions"]]
 
 
-@pytest.fixture(params=["2.0.0", "2.1.0"], autouse=True)
+@pytest.fixture(params=["2.0.0", "2.1.0", "3.0.0"], autouse=True)
 def protocol_version(request: pytest.FixtureRequest) -> Iterator[str]:
     """Every test here runs once per supported protocol version of the vehicle."""
+    global STATE_TOPIC
     previous = fakes.PROTOCOL["version"]
     fakes.PROTOCOL["version"] = request.param
+    STATE_TOPIC = topic()
     yield request.param
     fakes.PROTOCOL["version"] = previous
+    STATE_TOPIC = topic()
 
 
 class Published(list[tuple[str, dict]]):
@@ -70,7 +73,7 @@ def test_an_idle_available_vehicle_gets_the_assigned_order(controller, sent) -> 
     controller.sync([order()])
 
     topic, message = [(t, m) for t, m in sent if t.endswith("/order")][0]
-    assert topic == "uagv/v2/sim/AGV-1/order"
+    assert topic == fakes.topic(kind="order")
     assert message["orderId"] == "TO-7"
     assert message["orderUpdateId"] == 0
     assert [n["nodeId"] for n in message["nodes"]] == ["a", "b", "c", "d"]
@@ -200,7 +203,7 @@ def test_malformed_messages_are_counted_and_change_nothing(controller, payload) 
 
 
 def test_new_vehicles_are_registered_by_the_flusher_and_trigger_dispatch(controller) -> None:
-    controller.handle_message("uagv/v2/sim/AGV-9/state", state(serial="AGV-9"))
+    controller.handle_message(topic("AGV-9"), state(serial="AGV-9"))
 
     controller.flush()
     controller.flush()
@@ -227,7 +230,7 @@ def test_a_failed_flush_is_retried_with_nothing_lost(controller) -> None:
 
 def test_other_interfaces_and_own_echoes_are_ignored(controller) -> None:
     controller.handle_message("other/v2/sim/AGV-1/state", state())
-    controller.handle_message("uagv/v2/sim/AGV-1/order", b"{}")
+    controller.handle_message(topic(kind="order"), b"{}")
     assert controller.fleet.by_pk(1).state is None
 
 
@@ -302,16 +305,16 @@ def test_reconnect_requests_state_and_factsheet(controller, sent) -> None:
     offline = {
         "headerId": 9,
         "timestamp": "2026-01-01T00:00:00.00Z",
-        "version": "2.0.0",
+        "version": fakes.PROTOCOL["version"],
         "manufacturer": "sim",
         "serialNumber": "AGV-1",
         "connectionState": "OFFLINE",
     }
-    controller.handle_message("uagv/v2/sim/AGV-1/connection", json.dumps(offline).encode())
+    controller.handle_message(topic(kind="connection"), json.dumps(offline).encode())
     sent.clear()
 
     online = {**offline, "connectionState": "ONLINE"}
-    controller.handle_message("uagv/v2/sim/AGV-1/connection", json.dumps(online).encode())
+    controller.handle_message(topic(kind="connection"), json.dumps(online).encode())
 
     assert instant_actions_in(sent) == ["stateRequest", "factsheetRequest"]
     assert controller.fleet.by_pk(1).connection == "ONLINE"
@@ -361,8 +364,8 @@ def test_clock_skew_is_measured_from_the_state_timestamp(controller) -> None:
 
 def test_garbage_on_unknown_serial_numbers_registers_nobody(controller) -> None:
     for n in range(1000):
-        controller.handle_message(f"uagv/v2/evil/X{n}/state", b'{"headerId": "nope"}')
-        controller.handle_message(f"uagv/v2/evil/Y{n}/state", state(serial="AGV-1"))
+        controller.handle_message(topic(f"X{n}", manufacturer="evil"), b'{"headerId": "nope"}')
+        controller.handle_message(topic(f"Y{n}", manufacturer="evil"), state(serial="AGV-1"))
 
     assert set(controller.fleet.vehicles) == {("sim", "AGV-1")}
     assert controller.counters["decode_errors"] == 1000
