@@ -6,5 +6,6 @@ from django.urls import include, path
 urlpatterns = [
     path("admin/", admin.site.urls),
     path("api/v1/", include("fleet.api_urls")),
+    path("layouts/", include("maps.urls")),
     path("", include("control.urls")),
 ]

@@ -1,4 +1,4 @@
-"""Admin for sites, maps, LIF imports and layouts, vehicle types, nodes, edges and stations.
+"""Admin for sites, maps, LIF imports and layouts, vehicle types, nodes, edges, stations, zones.
 
 Every change of the graph made here goes through `maps.services.mark_layout_changed`, so routing
 caches see it.
@@ -14,6 +14,7 @@ from django.db.models import Model, QuerySet
 from django.http import HttpRequest, HttpResponse, HttpResponseRedirect
 from django.template.response import TemplateResponse
 from django.urls import URLPattern, path, reverse
+from django.utils.html import format_html
 
 from maps.lif.export import export_lif
 from maps.models import (
@@ -22,15 +23,18 @@ from maps.models import (
     Layout,
     LifImport,
     Map,
+    MapVersion,
     Node,
     NodeProperty,
     Site,
     Station,
     StationNode,
     VehicleType,
+    Zone,
 )
 from maps.selectors import validate_layout
-from maps.services import import_lif, mark_layout_changed
+from maps.services import import_lif, mark_layout_changed, set_zones_enabled
+from maps.services.zones import counter_clockwise
 
 MAX_FINDING_MESSAGES = 20
 
@@ -70,13 +74,27 @@ class SiteAdmin(admin.ModelAdmin[Site]):
     inlines = [MapInline]
 
 
+class MapVersionInline(admin.TabularInline[MapVersion, Map]):
+    """The versions saved in the layout editor, newest first (read only)."""
+
+    model = MapVersion
+    fields = ["number", "saved_at", "saved_by", "note", "counts", "revision"]
+    readonly_fields = ["number", "saved_at", "saved_by", "note", "counts", "revision"]
+    extra = 0
+    max_num = 0
+    can_delete = False
+    ordering = ["-number"]
+
+
 @admin.register(Map)
 class MapAdmin(admin.ModelAdmin[Map]):
-    list_display = ["map_id", "name", "site", "level", "revision", "updated_at"]
+    list_display = ["map_id", "name", "site", "level", "version", "revision", "editor_link"]
     list_filter = ["site"]
     search_fields = ["map_id", "name"]
-    readonly_fields = ["revision", "lif_import", "source_id"]
+    readonly_fields = ["revision", "version", "lif_import", "source_id"]
     actions = ["validate", "export"]
+    change_form_template = "admin/maps/map/change_form.html"
+    inlines = [MapVersionInline]
     fieldsets = [
         (None, {"fields": ["map_id", "name", "description", "site", "level"]}),
         (
@@ -91,8 +109,12 @@ class MapAdmin(admin.ModelAdmin[Map]):
                 ]
             },
         ),
-        ("Origin", {"fields": ["lif_import", "source_id", "revision"]}),
+        ("Origin", {"fields": ["lif_import", "source_id", "revision", "version"]}),
     ]
+
+    @admin.display(description="layout editor")
+    def editor_link(self, obj: Map) -> str:
+        return format_html('<a href="{}">edit layout</a>', reverse("maps:edit", args=[obj.pk]))
 
     @admin.action(description="Validate the selected maps")
     def validate(self, request: HttpRequest, queryset: QuerySet[Map]) -> None:
@@ -220,3 +242,49 @@ class StationAdmin(LayoutChangeAdmin):
     search_fields = ["station_id", "name"]
     raw_id_fields = ["node", "layout"]
     inlines = [StationNodeInline]
+
+
+@admin.register(Zone)
+class ZoneAdmin(LayoutChangeAdmin):
+    """Zones: vertices as JSON here (drawn in the layout editor); the form checks type rules."""
+
+    list_display = ["zone_id", "name", "map", "zone_type", "enabled", "max_speed"]
+    list_filter = ["map", "zone_type", "enabled"]
+    search_fields = ["zone_id", "name"]
+    filter_horizontal = ["vehicle_types"]
+    actions = ["enable", "disable"]
+    fieldsets = [
+        (None, {"fields": ["map", "zone_id", "name", "description", "zone_type", "enabled"]}),
+        ("Shape", {"fields": ["vertices"]}),
+        (
+            "What the zone does (by type)",
+            {
+                "fields": [
+                    "max_speed",
+                    "direction",
+                    "limitation",
+                    "penalty_factor",
+                    "priority_factor",
+                    "release_loss_behavior",
+                    "vehicle_types",
+                    "entry_actions",
+                    "during_actions",
+                    "exit_actions",
+                ]
+            },
+        ),
+    ]
+
+    def save_model(self, request: HttpRequest, obj: Zone, form: Any, change: bool) -> None:
+        obj.vertices = counter_clockwise(obj.vertices)  # the form's clean() checked them
+        super().save_model(request, obj, form, change)
+
+    @admin.action(description="Enable the selected zones")
+    def enable(self, request: HttpRequest, queryset: QuerySet[Zone]) -> None:
+        count = set_zones_enabled(zones=queryset.select_related("map"), enabled=True)
+        self.message_user(request, f"{count} zone(s) enabled", messages.SUCCESS)
+
+    @admin.action(description="Disable the selected zones")
+    def disable(self, request: HttpRequest, queryset: QuerySet[Zone]) -> None:
+        count = set_zones_enabled(zones=queryset.select_related("map"), enabled=False)
+        self.message_user(request, f"{count} zone(s) disabled", messages.SUCCESS)

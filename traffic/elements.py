@@ -40,7 +40,9 @@ class GraphEdge:
     """A directed, traversable edge of the layout with its length in metres.
 
     `max_speed` (m/s) limits every vehicle; `rules` maps vehicle type ids to what each type may do
-    on the edge (an edge with rules is usable only by those types).
+    on the edge (an edge with rules is usable only by those types). `cost_factor` scales what
+    routing pays for the edge in both views, travel time and distance (zones: above 1 in a
+    penalty zone, below 1 in a priority zone); lengths stay true, route times become costs.
     """
 
     edge_id: str
@@ -49,6 +51,7 @@ class GraphEdge:
     length: float
     max_speed: float | None = None
     rules: Mapping[str, EdgeRule] = field(default_factory=dict, compare=False, hash=False)
+    cost_factor: float = 1.0
 
     def rule_for(self, profile: VehicleProfile) -> EdgeRule | None:
         """The rule a vehicle of `profile` drives by: an open default, or None if it may not."""

@@ -2,7 +2,8 @@
 
 Two views of one layout:
 
-- by distance (`shortest_path`, `distances_to`, `path_length`): metres, every vehicle, every edge;
+- by distance (`shortest_path`, `distances_to`, `path_length`): metres, every vehicle, every edge
+  (`distances_to` scales an edge by its `cost_factor`, 1 unless a penalty or priority zone says);
 - by travel time for a vehicle profile (`route`, `route_from_table`, `routes`,
   `travel_times_to`): seconds = length / min(edge limit, type limit, vehicle speed) plus turning
   on the spot, on the edges and nodes the profile's vehicle type may use (`traffic.timegraph`).
@@ -44,11 +45,11 @@ class RoutingGraph:
         self._edges: dict[tuple[str, str], GraphEdge] = {}
         for edge in self._all_edges:
             known = self._edges.get((edge.start, edge.end))
-            if known is not None and known.length <= edge.length:
+            if known is not None and _weight(known) <= _weight(edge):
                 continue  # of parallel edges, routing by distance only ever wants the shortest
             self._edges[(edge.start, edge.end)] = edge
         for edge in self._edges.values():
-            self._graph.add_edge(self._index[edge.start], self._index[edge.end], edge.length)
+            self._graph.add_edge(self._index[edge.start], self._index[edge.end], _weight(edge))
         self._reversed = self._graph.copy()
         self._reversed.reverse()
         self._distances: OrderedDict[str, dict[str, float]] = OrderedDict()
@@ -170,3 +171,8 @@ class RoutingGraph:
         for node_id in node_ids:
             if node_id not in self._index:
                 raise NoRouteError(f"unknown node {node_id}")
+
+
+def _weight(edge: GraphEdge) -> float:
+    """What routing by distance pays for an edge: its length, scaled by its zone cost factor."""
+    return edge.length * edge.cost_factor

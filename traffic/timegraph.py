@@ -151,7 +151,7 @@ class TimeGraph:
             length = edge.length
             travel_start = travel_end = heading(end.x - start.x, end.y - start.y)
         speeds = [s for s in (self.profile.max_speed, edge.max_speed, rule.max_speed) if s]
-        time = length / min(speeds) if speeds else length
+        time = (length / min(speeds) if speeds else length) * edge.cost_factor
         return _Leg(
             state=self._graph.add_node(edge.edge_id),
             edge=edge,

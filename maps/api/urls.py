@@ -1,12 +1,13 @@
 from django.urls import path
 from rest_framework.routers import SimpleRouter
 
-from maps.api.views import LifImportApi, MapViewSet, SiteViewSet, StationViewSet
+from maps.api.views import LifImportApi, MapViewSet, SiteViewSet, StationViewSet, ZoneViewSet
 
 router = SimpleRouter()
 router.register("maps", MapViewSet)
 router.register("sites", SiteViewSet)
 router.register("stations", StationViewSet)
+router.register("zones", ZoneViewSet)
 urlpatterns = [
     path("lif/import/", LifImportApi.as_view(), name="lif-import"),
     *router.urls,

@@ -1,11 +1,13 @@
-"""API of maps, sites and stations: read-only data, LIF import and export, validation."""
+"""API of maps, sites, stations and zones: read-only layout data, zones read and write (staff),
+LIF import and export, validation, edge speed limits after zones."""
 
 from typing import Any
 
+from drf_spectacular.utils import extend_schema
 from rest_framework import status, viewsets
 from rest_framework.decorators import action
 from rest_framework.parsers import JSONParser, MultiPartParser
-from rest_framework.permissions import IsAdminUser
+from rest_framework.permissions import SAFE_METHODS, BasePermission, IsAdminUser
 from rest_framework.request import Request
 from rest_framework.response import Response
 from rest_framework.views import APIView
@@ -15,10 +17,28 @@ from maps.api.serializers import (
     MapSerializer,
     SiteSerializer,
     StationSerializer,
+    ZoneInputSerializer,
+    ZoneSerializer,
 )
-from maps.models import Map, Site, Station
-from maps.selectors import export_map_lif, export_site_lif, layout_as_dict, validate_layout
-from maps.services import import_lif
+from maps.models import Map, Site, Station, Zone
+from maps.selectors import (
+    edge_speed_limits,
+    export_map_lif,
+    export_site_lif,
+    layout_as_dict,
+    validate_layout,
+)
+from maps.services import create_zone, delete_zone, import_lif, update_zone
+
+
+class StaffWrites(BasePermission):
+    """Everyone signed in reads; only staff change."""
+
+    def has_permission(self, request: Request, view: Any) -> bool:
+        user = request.user
+        if not user or not user.is_authenticated:
+            return False
+        return request.method in SAFE_METHODS or bool(user.is_staff)
 
 
 class MapViewSet(viewsets.ReadOnlyModelViewSet[Map]):
@@ -49,6 +69,60 @@ class MapViewSet(viewsets.ReadOnlyModelViewSet[Map]):
                 "findings": [f.as_dict() for f in findings],
             }
         )
+
+    @action(detail=True, url_path="speed-limits")
+    def speed_limits(self, request: Request, *args: Any, **kwargs: Any) -> Response:
+        """Edge id → speed limit (m/s, null: none) after speed zones; closed edges left out."""
+        layout = self.get_object()
+        return Response({"map": layout.map_id, "edges": edge_speed_limits(map=layout)})
+
+
+class ZoneViewSet(viewsets.ModelViewSet[Zone]):
+    """Zones of the maps: list (filter by ?map=, ?zone_type=, ?enabled=), read; staff create,
+    change and delete. Every change takes effect in routing at once (the map's revision bumps)."""
+
+    queryset = Zone.objects.select_related("map").prefetch_related("vehicle_types")
+    serializer_class = ZoneSerializer
+    permission_classes = [StaffWrites]
+
+    def get_queryset(self) -> Any:
+        zones = super().get_queryset().order_by("map__map_id", "zone_id")
+        params = self.request.query_params
+        if params.get("map"):
+            zones = zones.filter(map__map_id=params["map"])
+        if params.get("zone_type"):
+            zones = zones.filter(zone_type=params["zone_type"])
+        if params.get("enabled") in ("true", "false"):
+            zones = zones.filter(enabled=params["enabled"] == "true")
+        return zones
+
+    @extend_schema(request=ZoneInputSerializer, responses={201: ZoneSerializer})
+    def create(self, request: Request, *args: Any, **kwargs: Any) -> Response:
+        data = _valid(ZoneInputSerializer(data=request.data))
+        zone = create_zone(**data)
+        return Response(ZoneSerializer(zone).data, status=status.HTTP_201_CREATED)
+
+    @extend_schema(request=ZoneInputSerializer, responses=ZoneSerializer)
+    def update(self, request: Request, *args: Any, **kwargs: Any) -> Response:
+        zone = self.get_object()
+        partial = kwargs.get("partial", False)
+        data = _valid(ZoneInputSerializer(zone, data=request.data, partial=partial))
+        data.pop("map", None)  # a zone stays on its map
+        zone = update_zone(zone=zone, **data)
+        return Response(ZoneSerializer(zone).data)
+
+    @extend_schema(request=ZoneInputSerializer, responses=ZoneSerializer)
+    def partial_update(self, request: Request, *args: Any, **kwargs: Any) -> Response:
+        return self.update(request, *args, partial=True, **kwargs)
+
+    def destroy(self, request: Request, *args: Any, **kwargs: Any) -> Response:
+        delete_zone(zone=self.get_object())
+        return Response(status=status.HTTP_204_NO_CONTENT)
+
+
+def _valid(serializer: Any) -> dict[str, Any]:
+    serializer.is_valid(raise_exception=True)
+    return dict(serializer.validated_data)
 
 
 class SiteViewSet(viewsets.ReadOnlyModelViewSet[Site]):

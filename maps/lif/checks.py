@@ -41,6 +41,7 @@ def check_references(document: LifDocument, report: ImportReport) -> None:
     for layout in document.layouts:
         _place_on_maps(layout, report)
     _levels(document, report)
+    _zones(document, report)
 
 
 def _unique(report: ImportReport, items: Iterable[tuple[str, str, str]], what: str) -> None:
@@ -93,3 +94,16 @@ def _levels(document: LifDocument, report: ImportReport) -> None:
                     f'map "{map_id}" is on level "{known[0]}" in layout "{known[1]}" '
                     f'and on "{layout.level_id}" here; the first is kept',
                 )
+
+
+def _zones(document: LifDocument, report: ImportReport) -> None:
+    """Zones lie on a map of the file, with ids unique per map."""
+    maps = {n.map_id for n in document.nodes()}
+    _unique(
+        report,
+        ((f"{z.map_id}/{z.zone_id}", z.path, "zoneId") for z in document.zones()),
+        "zone",
+    )
+    for zone in document.zones():
+        if zone.map_id and zone.map_id not in maps:
+            report.error(f"{zone.path}.mapId", f'no node of the file is on map "{zone.map_id}"')

@@ -86,6 +86,18 @@ class LifStation:
 
 
 @dataclass
+class LifZone:
+    """A zone from a layout's openFleet extension, in our model's field names."""
+
+    zone_id: str
+    map_id: str
+    zone_type: str
+    path: str
+    fields: dict[str, Any] = field(default_factory=dict)  # Zone model fields besides ids
+    vehicle_types: list[str] = field(default_factory=list)
+
+
+@dataclass
 class LifLayout:
     """A layout: one plane of nodes, edges and stations."""
 
@@ -98,6 +110,7 @@ class LifLayout:
     nodes: list[LifNode] = field(default_factory=list)
     edges: list[LifEdge] = field(default_factory=list)
     stations: list[LifStation] = field(default_factory=list)
+    zones: list[LifZone] = field(default_factory=list)  # openFleet extension
 
 
 @dataclass
@@ -119,6 +132,9 @@ class LifDocument:
     def stations(self) -> list[LifStation]:
         return [s for layout in self.layouts for s in layout.stations]
 
+    def zones(self) -> list[LifZone]:
+        return [z for layout in self.layouts for z in layout.zones]
+
     def vehicle_types(self) -> list[str]:
         """Every vehicle type id named, in order of first mention."""
         seen: dict[str, None] = {}
@@ -126,4 +142,6 @@ class LifDocument:
             seen.update((p.vehicle_type, None) for p in node.props)
         for edge in self.edges():
             seen.update((p.vehicle_type, None) for p in edge.props)
+        for zone in self.zones():
+            seen.update((t, None) for t in zone.vehicle_types)
         return list(seen)

@@ -2,9 +2,9 @@
 
 Elements keep the LIF layout they were imported in; elements made here (the demo, the admin) go
 to one layout per map, named after it. What LIF has no field for goes into an `openFleet` object
-(station kind, a node heading or an edge speed limit for every vehicle), which our importer reads
-back and other readers may ignore. Only edges whose both nodes are exported are written: export a
-whole site to keep transitions between floors.
+(station kind, a node heading or an edge speed limit for every vehicle, and a layout's zones in
+VDA 5050 3.0 form), which our importer reads back and other readers may ignore. Only edges whose
+both nodes are exported are written: export a whole site to keep transitions between floors.
 """
 
 from collections.abc import Sequence
@@ -14,7 +14,17 @@ from typing import Any
 from django.db.models import Prefetch
 
 from maps.lif.parse import EXTENSION
-from maps.models import Edge, EdgeProperty, Layout, Map, Node, NodeProperty, Station, StationNode
+from maps.models import (
+    Edge,
+    EdgeProperty,
+    Layout,
+    Map,
+    Node,
+    NodeProperty,
+    Station,
+    StationNode,
+    Zone,
+)
 
 LIF_VERSION = "1.0.0"
 CREATOR = "Open Fleet"
@@ -52,6 +62,7 @@ def export_lif(*, maps: Sequence[Map], project: str = "") -> dict[str, Any]:
     )
     for station in stations:
         _group(groups, station.layout, station.map)["stations"].append(_station(station))
+    _zones(groups, maps)
     ordered = sorted(groups.items(), key=lambda item: _order(item[0]))
     return {
         "metaInformation": {
@@ -85,6 +96,56 @@ def _group(groups: dict[Any, dict[str, Any]], layout: Layout | None, map: Map) -
             )
         groups[key] = {**head, "nodes": [], "edges": [], "stations": []}
     return groups[key]
+
+
+def _zones(groups: dict[Any, dict[str, Any]], maps: list[Map]) -> None:
+    """Each map's zones go into the `openFleet` object of the first layout with its nodes."""
+    zones = (
+        Zone.objects.filter(map__in=maps)
+        .select_related("map")
+        .prefetch_related("vehicle_types")
+        .order_by("map__map_id", "zone_id")
+    )
+    first: dict[str, dict[str, Any]] = {}
+    for group in groups.values():
+        for node in group["nodes"]:
+            first.setdefault(node["mapId"], group)
+    for zone in zones:
+        group = first.get(zone.map.map_id) or _group(groups, None, zone.map)
+        group.setdefault(EXTENSION, {}).setdefault("zones", []).append(zone_to_lif(zone))
+
+
+def zone_to_lif(zone: Zone) -> dict[str, Any]:
+    """A zone in VDA 5050 3.0 names (zoneId, zoneType, vertices, ...) plus mapId and ours."""
+    limitation = {}
+    if zone.limitation and zone.zone_type in ("DIRECTED", "BIDIRECTED"):
+        key = "directedLimitation" if zone.zone_type == "DIRECTED" else "bidirectedLimitation"
+        limitation[key] = zone.limitation
+    actions = {}
+    if zone.zone_type == "ACTION":
+        actions = {
+            "entryActions": zone.entry_actions,
+            "duringActions": zone.during_actions,
+            "exitActions": zone.exit_actions,
+        }
+    data = {
+        "zoneId": zone.zone_id,
+        "zoneType": zone.zone_type,
+        "mapId": zone.map.map_id,
+        "enabled": zone.enabled,
+        "vertices": [{"x": v["x"], "y": v["y"]} for v in zone.vertices],
+    }
+    data |= _optional(
+        zoneDescriptor=zone.name,
+        zoneDescription=zone.description,
+        maximumSpeed=zone.max_speed,
+        direction=zone.direction,
+        penaltyFactor=zone.penalty_factor,
+        priorityFactor=zone.priority_factor,
+        releaseLossBehavior=zone.release_loss_behavior,
+        vehicleTypeIds=sorted(t.type_id for t in zone.vehicle_types.all()),
+    )
+    return data | limitation | actions
 
 
 def _order(key: Any) -> tuple[int, int, str]:

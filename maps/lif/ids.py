@@ -74,3 +74,5 @@ def apply_prefix(document: LifDocument, prefix: str) -> None:
         for station in layout.stations:
             station.station_id, station.layout = prefix + station.station_id, layout.layout_id
             station.node_ids = [prefix + n for n in station.node_ids]
+        for zone in layout.zones:
+            zone.map_id = prefix + zone.map_id

@@ -10,13 +10,15 @@ from collections.abc import Mapping
 from typing import Any
 
 from maps.lif.checks import check_references
-from maps.lif.document import LifDocument, LifEdge, LifLayout, LifNode, LifStation
+from maps.lif.document import LifDocument, LifEdge, LifLayout, LifNode, LifStation, LifZone
 from maps.lif.properties import read_edge_props, read_node_props
 from maps.lif.reader import Reader, show
 from maps.lif.report import ImportReport
-from maps.models import Station
+from maps.models import Station, Zone
+from maps.zoning import zone_problems
 
-EXTENSION = "openFleet"  # our own fields that LIF lacks (station kind, limits for every vehicle)
+EXTENSION = "openFleet"  # our own fields that LIF lacks (station kind, limits for every vehicle,
+# a layout's zones)
 META_KEYS = ("projectIdentification", "creator", "exportTimestamp", "lifVersion")
 LAYOUT_KEYS = (
     "layoutId",
@@ -27,6 +29,27 @@ LAYOUT_KEYS = (
     "nodes",
     "edges",
     "stations",
+    EXTENSION,
+)
+ZONE_KEYS = (
+    "zoneId",
+    "zoneType",
+    "mapId",
+    "enabled",
+    "vertices",
+    "zoneDescriptor",
+    "zoneDescription",
+    "maximumSpeed",
+    "direction",
+    "directedLimitation",
+    "bidirectedLimitation",
+    "penaltyFactor",
+    "priorityFactor",
+    "releaseLossBehavior",
+    "entryActions",
+    "duringActions",
+    "exitActions",
+    "vehicleTypeIds",
 )
 NODE_KEYS = (
     "nodeId",
@@ -150,7 +173,75 @@ def _layout(reader: Reader, raw: Any, path: str) -> LifLayout | None:
         station = _station(reader, item, f"{path}.stations[{i}]", layout.layout_id)
         if station is not None:
             layout.stations.append(station)
+    extension = _extension(reader, data, path, ("zones",))
+    for i, item in enumerate(reader.array(extension, "zones", f"{path}.{EXTENSION}") or []):
+        zone = _zone(reader, item, f"{path}.{EXTENSION}.zones[{i}]")
+        if zone is not None:
+            layout.zones.append(zone)
     return layout
+
+
+def _zone(reader: Reader, raw: Any, path: str) -> LifZone | None:
+    """A zone as `maps.lif.export.zone_to_lif` writes it (VDA 5050 3.0 names plus ours)."""
+    data = reader.obj(raw, path)
+    if data is None:
+        return None
+    reader.known(data, path, "zone", ZONE_KEYS)
+    zone_type = reader.choice(data, "zoneType", path, Zone.Type.values, required=True)
+    limitation_key = "bidirectedLimitation" if zone_type == "BIDIRECTED" else "directedLimitation"
+    enabled = reader.boolean(data, "enabled", path)
+    fields: dict[str, Any] = {
+        "zone_type": zone_type,
+        "vertices": data.get("vertices"),
+        "name": reader.string(data, "zoneDescriptor", path)[:200],
+        "description": reader.string(data, "zoneDescription", path),
+        "enabled": True if enabled is None else enabled,
+        "max_speed": reader.number(data, "maximumSpeed", path, positive=True),
+        "direction": reader.number(data, "direction", path),
+        "limitation": reader.choice(data, limitation_key, path, Zone.Limitation.values),
+        "penalty_factor": reader.number(data, "penaltyFactor", path, minimum=0.0),
+        "priority_factor": reader.number(data, "priorityFactor", path, minimum=0.0),
+        "release_loss_behavior": reader.choice(
+            data, "releaseLossBehavior", path, Zone.ReleaseLoss.values
+        ),
+        "entry_actions": reader.array(data, "entryActions", path) or [],
+        "during_actions": reader.array(data, "duringActions", path) or [],
+        "exit_actions": reader.array(data, "exitActions", path) or [],
+    }
+    zone = LifZone(
+        zone_id=reader.string(data, "zoneId", path, required=True),
+        map_id=reader.string(data, "mapId", path, required=True),
+        zone_type=zone_type,
+        path=path,
+        fields=fields,
+        vehicle_types=reader.strings(data, "vehicleTypeIds", path) or [],
+    )
+    if zone_type:
+        rule_fields = {k: v for k, v in fields.items() if k in RULE_FIELDS}
+        for field, message in zone_problems(**rule_fields):
+            reader.report.error(f"{path}.{ZONE_NAMES.get(field, field)}", message)
+    return zone
+
+
+RULE_FIELDS = (
+    "zone_type",
+    "vertices",
+    "max_speed",
+    "direction",
+    "limitation",
+    "penalty_factor",
+    "priority_factor",
+    "release_loss_behavior",
+)
+ZONE_NAMES = {
+    "vertices": "vertices",
+    "max_speed": "maximumSpeed",
+    "direction": "direction",
+    "limitation": "directedLimitation",
+    "penalty_factor": "penaltyFactor",
+    "priority_factor": "priorityFactor",
+    "release_loss_behavior": "releaseLossBehavior",
+}
 
 
 def _node(reader: Reader, raw: Any, path: str, layout: str) -> LifNode | None:

@@ -71,7 +71,8 @@ class Map(models.Model):
     site (LIF `layoutLevelId`). The floor plan is a background image: `floor_plan_scale` metres
     per pixel, and its bottom-left corner at (`floor_plan_origin_x`, `floor_plan_origin_y`) m,
     turned by `floor_plan_rotation` rad. `revision` counts layout changes; routing caches key on
-    it. Maps without a site are standalone (the demo warehouse).
+    it. `version` is the latest version saved in the layout editor (`MapVersion`). Maps without a
+    site are standalone (the demo warehouse).
     """
 
     site = models.ForeignKey(
@@ -100,6 +101,9 @@ class Map(models.Model):
         max_length=100, blank=True, help_text="mapId in the LIF file, when it was prefixed"
     )
     revision = models.PositiveIntegerField(default=0, editable=False)
+    version = models.PositiveIntegerField(
+        default=0, editable=False, help_text="latest version saved in the layout editor"
+    )
     created_at = models.DateTimeField(auto_now_add=True)
     updated_at = models.DateTimeField(auto_now=True)
 

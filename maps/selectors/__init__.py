@@ -1,7 +1,9 @@
-"""Reads of layouts: routing graphs, plain layout data, LIF export, validation."""
+"""Reads of layouts: routing graphs, plain layout data, LIF export, validation, zones, editor."""
 
+from maps.selectors.editor import editor_data
 from maps.selectors.graph import (
     clear_graph_cache,
+    edge_speed_limits,
     load_graph,
     load_graph_for_routing,
     load_site_graph,
@@ -9,17 +11,23 @@ from maps.selectors.graph import (
 )
 from maps.selectors.layout import export_map_lif, export_site_lif, get_default_map, layout_as_dict
 from maps.selectors.validation import Finding, validate_layout
+from maps.selectors.zones import list_zones, zone_as_dict, zone_rules
 
 __all__ = [
     "Finding",
     "clear_graph_cache",
+    "edge_speed_limits",
+    "editor_data",
     "export_map_lif",
     "export_site_lif",
     "get_default_map",
     "layout_as_dict",
+    "list_zones",
     "load_graph",
     "load_graph_for_routing",
     "load_site_graph",
     "validate_layout",
     "vehicle_profile",
+    "zone_as_dict",
+    "zone_rules",
 ]

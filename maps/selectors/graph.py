@@ -1,5 +1,9 @@
 """Routing graphs of maps and sites: rows converted to `traffic` data, cached per revision.
 
+Enabled zones shape the graph (`maps.zoning.apply_zones`): edges into blocked zones and against
+one-way zones are left out, speed limit zones lower edge limits, penalty and priority zones scale
+edge costs. Zone writes bump the revision like every other layout change.
+
 A graph is cached under the revision (and last change time) of every map it covers; services bump
 the revision on every layout change (`maps.services.mark_layout_changed`), so the next load builds
 a fresh graph with empty distance tables. Each process keeps its own small cache.
@@ -14,6 +18,8 @@ from django.db.models import QuerySet
 
 from maps.lif.properties import nurbs_of
 from maps.models import Edge, EdgeProperty, Map, Node, NodeProperty, Site, VehicleType
+from maps.selectors.zones import zone_rules
+from maps.zoning import apply_zones
 from traffic import EdgeRule, GraphEdge, GraphNode, NodeRule, RoutingGraph, VehicleProfile
 from traffic.costs import BOTH, DEFAULT_SPEED
 
@@ -53,6 +59,30 @@ def vehicle_profile(
         load_set=load_set,
         height=vehicle_type.height,
     )
+
+
+def edge_speed_limits(
+    *, map: Map, vehicle_type: VehicleType | None = None
+) -> dict[str, float | None]:
+    """Edge id → speed limit (m/s, None: no limit) of every edge of `map` vehicles may drive
+    (transitions to other floors included).
+
+    The limit is the edge's own, lowered by the speed limit zones it runs through and, for a
+    vehicle type, by that type's LIF edge property. Edges a zone closes are left out. This is
+    the `maxSpeed` to put into a VDA 5050 order's edges.
+    """
+    graph = load_graph_for_routing(map=map)
+    limits: dict[str, float | None] = {}
+    for edge in graph.edges:
+        if graph.nodes[edge.start].map_id != map.map_id:
+            continue
+        limit = edge.max_speed
+        if vehicle_type is not None and edge.rules:
+            rule = edge.rules.get(vehicle_type.type_id)
+            if rule is not None and rule.max_speed is not None:
+                limit = min(limit, rule.max_speed) if limit is not None else rule.max_speed
+        limits[edge.edge_id] = limit
+    return limits
 
 
 def clear_graph_cache() -> None:
@@ -102,7 +132,7 @@ def _build(maps: QuerySet[Map]) -> RoutingGraph:
         .order_by("pk")
         .values_list("pk", "edge_id", "start__node_id", "end__node_id", "length", "max_speed")
     ]
-    return RoutingGraph(nodes.values(), edges)
+    return RoutingGraph(nodes.values(), apply_zones(nodes, edges, zone_rules(maps=maps)))
 
 
 RULE_FIELDS = (

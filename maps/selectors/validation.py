@@ -2,9 +2,13 @@
 
 Findings per map (reachability is judged on the site graph, so lifts to other floors count):
 
-errors    unreachable-node, dead-end, station-off-graph, duplicate-node-id
+errors    unreachable-node, dead-end, station-off-graph, duplicate-node-id,
+          station-in-blocked-zone, invalid-zone
 warnings  missing-reverse, overlapping-nodes, vehicle-type-cannot-reach-station,
-          station-on-aisle, charger-on-aisle, parking-on-aisle, trajectory-mismatch, empty-map
+          station-on-aisle, charger-on-aisle, parking-on-aisle, trajectory-mismatch, empty-map,
+          station-in-no-stopping-zone, parking-outside-parking-area,
+          charger-outside-charging-area, directed-zones-overlap
+info      node-in-blocked-zone (such nodes are not reported as unreachable)
 """
 
 import math
@@ -12,8 +16,20 @@ from collections import defaultdict
 from dataclasses import asdict, dataclass
 from typing import Any, Literal
 
-from maps.models import EdgeProperty, Map, Node, Station, StationNode
+from maps.models import EdgeProperty, Map, Node, Station, StationNode, Zone
 from maps.selectors.graph import load_graph_for_routing
+from maps.selectors.zones import zone_rules
+from maps.zoning import (
+    BIDIRECTED,
+    CHARGING,
+    DIRECTED,
+    NO_STOPPING,
+    PARKING,
+    ZoneRule,
+    closed_nodes,
+    zone_problems,
+    zones_at,
+)
 from traffic import RoutingGraph, VehicleProfile
 from traffic.reachability import Reachability, analyse
 
@@ -48,15 +64,23 @@ def validate_layout(*, map: Map) -> list[Finding]:
     graph = load_graph_for_routing(map=map)
     stations = _stations(map)
     reach = analyse(graph)
+    zones = zone_rules(maps=Map.objects.filter(pk=map.pk))
+    closed = closed_nodes((graph.nodes[n] for n in node_ids if n in graph.nodes), zones)
+    open_ids = node_ids - closed.keys()
+    open_stations = [s for s in stations if not set(s[2]) <= closed.keys()]
     findings = [
         *_duplicates(map, node_ids),
-        *_reachability(graph, reach, node_ids),
-        *_one_way(graph, reach, node_ids),
-        *_stations_off_graph(reach, stations),
+        *_reachability(graph, reach, open_ids),
+        *_one_way(graph, reach, open_ids),
+        *_stations_off_graph(reach, open_stations),
         *_overlaps(graph, node_ids),
-        *_vehicle_types(graph, node_ids, [s for s in stations if set(s[2]) & reach.main]),
+        *_vehicle_types(graph, open_ids, [s for s in open_stations if set(s[2]) & reach.main]),
         *_on_aisles(graph, stations),
         *_trajectories(map, graph),
+        *_closed(closed, stations),
+        *_zone_areas(graph, zones, stations),
+        *_zone_data(map),
+        *_directed_overlaps(zones),
     ]
     return sorted(findings, key=lambda f: (SEVERITY_ORDER[f.severity], f.code, f.object_id))
 
@@ -249,4 +273,109 @@ def _trajectories(map: Map, graph: RoutingGraph) -> list[Finding]:
                     f"the trajectory for {vehicle_type} ends {gap:.2f} m from the edge's nodes",
                 )
             )
+    return findings
+
+
+def _closed(closed: dict[str, str], stations: list[tuple[str, str, list[str]]]) -> list[Finding]:
+    """Nodes and stations inside zones no vehicle may enter."""
+    findings = [
+        Finding(
+            "info",
+            "node-in-blocked-zone",
+            "node",
+            node_id,
+            f"inside zone {zone_id}: no vehicle drives here while the zone is enabled",
+        )
+        for node_id, zone_id in sorted(closed.items())
+    ]
+    for station_id, _, nodes in stations:
+        if set(nodes) <= closed.keys():
+            zone_ids = ", ".join(sorted({closed[n] for n in nodes}))
+            findings.append(
+                Finding(
+                    "error",
+                    "station-in-blocked-zone",
+                    "station",
+                    station_id,
+                    f"unreachable: its node {', '.join(nodes)} is inside blocked zone {zone_ids}",
+                )
+            )
+    return findings
+
+
+def _zone_areas(
+    graph: RoutingGraph, zones: list[ZoneRule], stations: list[tuple[str, str, list[str]]]
+) -> list[Finding]:
+    """Stations in no-stopping zones; parking and charging stations outside their areas."""
+    by_type: dict[str, list[ZoneRule]] = defaultdict(list)
+    for zone in zones:
+        by_type[zone.zone_type].append(zone)
+    findings = []
+    for station_id, kind, nodes in stations:
+        points = [(graph.nodes[n].x, graph.nodes[n].y) for n in nodes if n in graph.nodes]
+        for zone_id in sorted(
+            {z.zone_id for p in points for z in zones_at(p, by_type[NO_STOPPING])}
+        ):
+            findings.append(
+                Finding(
+                    "warning",
+                    "station-in-no-stopping-zone",
+                    "station",
+                    station_id,
+                    f"vehicles stop at this station, inside no-stopping zone {zone_id}",
+                )
+            )
+        area, code = AREAS.get(kind, ("", ""))
+        if area and by_type[area] and not any(zones_at(p, by_type[area]) for p in points):
+            findings.append(
+                Finding(
+                    "warning",
+                    code,
+                    "station",
+                    station_id,
+                    f"outside every {area.lower()} zone of the map",
+                )
+            )
+    return findings
+
+
+AREAS = {
+    "PARK": (PARKING, "parking-outside-parking-area"),
+    "CHARGE": (CHARGING, "charger-outside-charging-area"),
+}
+
+
+def _zone_data(map: Map) -> list[Finding]:
+    """Zones whose data breaks the rules of their type (edited around the services)."""
+    findings = []
+    for zone in Zone.objects.filter(map=map, enabled=True):
+        for field, message in zone_problems(**zone.rule_fields()):
+            findings.append(
+                Finding(
+                    "error",
+                    "invalid-zone",
+                    "zone",
+                    zone.zone_id,
+                    f"{field}: {message}; routing ignores what it cannot read",
+                )
+            )
+    return findings
+
+
+def _directed_overlaps(zones: list[ZoneRule]) -> list[Finding]:
+    """VDA 5050 3.0: directed and bidirected zones must not overlap each other."""
+    directed = [z for z in zones if z.zone_type in (DIRECTED, BIDIRECTED)]
+    findings = []
+    for i, first in enumerate(directed):
+        for second in directed[i + 1 :]:
+            if first.polygon.overlaps(second.polygon):
+                findings.append(
+                    Finding(
+                        "warning",
+                        "directed-zones-overlap",
+                        "zone",
+                        first.zone_id,
+                        f"overlaps zone {second.zone_id}: vehicles cannot follow both directions",
+                    )
+                )
     return findings

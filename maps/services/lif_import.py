@@ -23,7 +23,9 @@ from maps.models import (
     Station,
     StationNode,
     VehicleType,
+    Zone,
 )
+from maps.services.zones import counter_clockwise
 
 BATCH = 2000
 ID_LENGTH = 100
@@ -132,6 +134,7 @@ def _lengths_fit(document: LifDocument, report: ImportReport) -> bool:
     checks += [(n.path + ".mapId", n.map_id) for n in document.nodes()]
     checks += [(e.path + ".edgeId", e.edge_id) for e in document.edges()]
     checks += [(s.path + ".stationId", s.station_id) for s in document.stations()]
+    checks += [(z.path + ".zoneId", z.zone_id) for z in document.zones()]
     for path, value in checks:
         if len(value) > ID_LENGTH:
             report.error(path, f"id longer than {ID_LENGTH} characters")
@@ -180,6 +183,7 @@ class _Writer:
             batch_size=BATCH,
         )
         stations = self._stations(nodes, layouts)
+        zones = self._zones(maps, types)
         self.report.maps = list(maps)
         self.report.counts = {
             "maps": len(maps),
@@ -189,6 +193,8 @@ class _Writer:
             "stations": stations,
             "vehicle types": len(types),
         }
+        if zones:
+            self.report.counts["zones"] = zones
 
     def _vehicle_types(self) -> dict[str, VehicleType]:
         wanted = self.document.vehicle_types()
@@ -292,6 +298,23 @@ class _Writer:
             for i, node_id in enumerate(s.node_ids)
         )
         return len(stations)
+
+    def _zones(self, maps: dict[str, Map], types: dict[str, VehicleType]) -> int:
+        zones = self.document.zones()
+        rows = Zone.objects.bulk_create(
+            Zone(
+                map=maps[z.map_id],
+                zone_id=z.zone_id,
+                **{**z.fields, "vertices": counter_clockwise(z.fields["vertices"])},
+            )
+            for z in zones
+        )
+        Zone.vehicle_types.through.objects.bulk_create(
+            Zone.vehicle_types.through(zone_id=row.pk, vehicletype_id=types[t].pk)
+            for row, z in zip(rows, zones, strict=True)
+            for t in dict.fromkeys(z.vehicle_types)
+        )
+        return len(rows)
 
     def _source(self, value: str) -> str:
         return value.removeprefix(self.prefix) if self.prefix else ""

@@ -18,7 +18,7 @@ from tests.e2e.processes import wait_until
 pytestmark = [pytest.mark.e2e, pytest.mark.django_db(transaction=True)]
 
 
-@pytest.mark.parametrize("version", ["2.0.0", "2.1.0"])
+@pytest.mark.parametrize("version", ["2.0.0", "2.1.0", "3.0.0"])
 def test_five_orders_finish_with_three_vehicles(
     fleet_env: dict[str, str], tmp_path: Path, version: str
 ) -> None:

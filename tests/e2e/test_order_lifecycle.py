@@ -35,7 +35,7 @@ class OrderSniffer:
         self.client = mqtt.Client(callback_api_version=CallbackAPIVersion.VERSION2)
         self.client.on_message = self._on_message
         self.client.connect(address.host, address.port)
-        self.client.subscribe(f"{interface}/+/+/+/order")
+        self.client.subscribe(f"{interface}/+/+/+/order")  # v2 and v3 topics
         self.client.loop_start()
 
     def _on_message(self, client: mqtt.Client, userdata: object, msg: mqtt.MQTTMessage) -> None:
@@ -56,12 +56,16 @@ def status(order: TransportOrder) -> str:
     return order.status
 
 
+VERSIONS = pytest.mark.parametrize("version", ["2.0.0", "2.1.0", "3.0.0"])
+
+
+@VERSIONS
 def test_cancel_then_next_order_then_freeze_and_resume(
-    fleet_env: dict[str, str], tmp_path: Path, stop_all: list[Process]
+    fleet_env: dict[str, str], tmp_path: Path, stop_all: list[Process], version: str
 ) -> None:
     layout = create_layout(spec=warehouse_layout(columns=6, rows=4))
     sniffer = OrderSniffer(fleet_env["MQTT_URL"], fleet_env["VDA5050_INTERFACE"])
-    stop_all.extend(start_fleet(fleet_env, tmp_path, layout, vehicles=1))
+    stop_all.extend(start_fleet(fleet_env, tmp_path, layout, vehicles=1, version=version))
     simulator = stop_all[-1]
     wait_until(lambda: Vehicle.objects.filter(connection="ONLINE").exists(), 60, "online", stop_all)
     pick = Station.objects.get(map=layout, station_id="PICK-1")
@@ -93,8 +97,9 @@ def test_cancel_then_next_order_then_freeze_and_resume(
     assert updates == sorted(updates)
 
 
+@VERSIONS
 def test_a_rejected_order_fails_with_the_vehicle_reason_and_the_next_one_runs(
-    fleet_env: dict[str, str], tmp_path: Path, stop_all: list[Process]
+    fleet_env: dict[str, str], tmp_path: Path, stop_all: list[Process], version: str
 ) -> None:
     layout = create_layout(spec=warehouse_layout(columns=6, rows=4))
     stop_all.extend(
@@ -103,6 +108,7 @@ def test_a_rejected_order_fails_with_the_vehicle_reason_and_the_next_one_runs(
             tmp_path,
             layout,
             vehicles=1,
+            version=version,
             extra=("--misbehave", "AGV-1:reject_orders=orderError,reject_count=1"),
         )
     )
@@ -115,4 +121,5 @@ def test_a_rejected_order_fails_with_the_vehicle_reason_and_the_next_one_runs(
     accepted = create_transport_order(source=pick, destination=drop)
     wait_until(lambda: status(accepted) == "FINISHED", 90, "next order finished", stop_all)
 
-    assert rejected.failure_reason.startswith("rejected by vehicle: orderError")
+    expected = "INVALID_ORDER_ACTION" if version.startswith("3.") else "orderError"  # 3.0 name
+    assert rejected.failure_reason.startswith(f"rejected by vehicle: {expected}")
