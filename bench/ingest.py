@@ -40,6 +40,9 @@ class NullStore:
     def vehicle_dialects(self) -> dict[int, str]:
         return {}
 
+    def layouts_revision(self) -> object:
+        return 0
+
     def request_dispatch(self) -> None:
         return None
 

@@ -22,6 +22,7 @@ class Capabilities:
     """The actions a vehicle declared in its factsheet, by action type."""
 
     actions: Mapping[str, vda5050.AgvAction]
+    optional_parameters: frozenset[str] = frozenset()  # SUPPORTED or REQUIRED (J.45)
     max_order_nodes: int | None = None  # maxArrayLens order.nodes / order.edges + 1
     min_order_interval: float = 0.0  # seconds between two orders or updates
 
@@ -38,9 +39,20 @@ class Capabilities:
         ]
         return cls(
             {a.action_type: a for a in factsheet.protocol_features.agv_actions},
+            optional_parameters=frozenset(
+                p.parameter for p in factsheet.protocol_features.optional_parameters
+            ),
             max_order_nodes=min(arrays) if arrays else None,  # 0/absent = no limit (J.44)
             min_order_interval=limits.timing.min_order_interval or 0.0,
         )
+
+
+def sends_max_speed(capabilities: Capabilities | None) -> bool:
+    """Whether edges may carry `maxSpeed` (A.6: only optional fields the vehicle supports)."""
+    if capabilities is None:
+        return False
+    names = {"order.edges.maxSpeed", "order.edges.maximumSpeed", "order.edge.maxSpeed"}
+    return not names.isdisjoint(capabilities.optional_parameters)
 
 
 def _plus_one(value: int | None) -> int | None:

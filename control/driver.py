@@ -9,6 +9,7 @@ import time
 from collections.abc import Callable
 
 import vda5050
+from control.capabilities import sends_max_speed
 from control.execution import LayoutIndex, OrderExecution, Phase, Progress, Window
 from control.live import LiveVehicle
 from control.order_messages import (
@@ -183,7 +184,13 @@ class OrderDriver:
         if not force and now - vehicle.last_order_sent < self._limits(vehicle).min_interval:
             return False
         job = LoadJob(order.load_id, order.load_type, order.pick_station, order.drop_station)
-        nodes, edges = build_order(execution, self.layouts()[order.map_id], window, job)
+        nodes, edges = build_order(
+            execution,
+            self.layouts()[order.map_id],
+            window,
+            job,
+            max_speed=sends_max_speed(vehicle.capabilities),
+        )
         self.publisher.order(
             vehicle,
             order_id=execution.vda_order_id,

@@ -31,6 +31,7 @@ class LayoutIndex:
     map_id: str
     nodes: dict[str, NodePlace]
     edges: dict[tuple[str, str], str]  # (start node, end node) -> edge id
+    speed_limits: dict[str, float] = field(default_factory=dict)  # edge id -> m/s, after zones
 
 
 class Phase(enum.StrEnum):

@@ -54,13 +54,19 @@ def _window(first: int, route_length: int, *, passed: int, limits: OrderLimits) 
 
 
 def build_order(
-    execution: OrderExecution, layout: LayoutIndex, window: Window, job: LoadJob
+    execution: OrderExecution,
+    layout: LayoutIndex,
+    window: Window,
+    job: LoadJob,
+    *,
+    max_speed: bool = False,
 ) -> tuple[list[vda5050.Node], list[vda5050.Edge]]:
     """The nodes and edges of route indices window.first..window.last.
 
     Node i has sequence id 2·i, the edge into it 2·i−1, so an update's stitching node repeats
     exactly what was sent before (same id, sequence id and actions). Pick and drop are HARD
-    blocking node actions so the vehicle stands still while handling the load.
+    blocking node actions so the vehicle stands still while handling the load. With `max_speed`
+    each edge carries its speed limit after zones, where it has one.
     """
     route = execution.route
     nodes: list[vda5050.Node] = []
@@ -68,9 +74,11 @@ def build_order(
     for index in range(window.first, window.last + 1):
         released = index <= window.released
         if index > window.first:
+            edge_id = layout.edges[(route[index - 1], route[index])]
             edges.append(
                 vda5050.Edge(
-                    edge_id=layout.edges[(route[index - 1], route[index])],
+                    edge_id=edge_id,
+                    max_speed=layout.speed_limits.get(edge_id) if max_speed else None,
                     sequence_id=2 * index - 1,
                     released=released,  # both ends released: the earlier one is
                     start_node_id=route[index - 1],

@@ -8,6 +8,7 @@ from django.db import close_old_connections, transaction
 from control.execution import LayoutIndex, NodePlace, Progress
 from control.ports import ActiveOrder, FlushBatch
 from maps.models import Edge, Map, Node
+from maps.selectors import edge_speed_limits
 from orders import selectors as order_selectors
 from orders import services as order_services
 from orders.tasks import dispatch_pending_orders_task
@@ -34,7 +35,12 @@ class DjangoStore:
                 .order_by("-length")
                 .values_list("edge_id", "start__node_id", "end__node_id")
             }
-            layouts[layout.map_id] = LayoutIndex(layout.map_id, nodes, edges)
+            limits = {
+                edge_id: limit
+                for edge_id, limit in edge_speed_limits(map=layout).items()
+                if limit is not None
+            }
+            layouts[layout.map_id] = LayoutIndex(layout.map_id, nodes, edges, limits)
         return layouts
 
     def load_vehicles(self) -> list[dict[str, Any]]:
@@ -84,6 +90,11 @@ class DjangoStore:
                     action_id="" if outcome.status == "REFUSED" else outcome.action_id,
                 )
         return registered
+
+    def layouts_revision(self) -> object:
+        """Changes whenever a map is added, removed or edited (zones included)."""
+        close_old_connections()
+        return sorted(Map.objects.values_list("map_id", "revision"))
 
     def vehicle_dialects(self) -> dict[int, str]:
         close_old_connections()

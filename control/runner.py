@@ -84,6 +84,7 @@ class ControlLoop:
         self.receive_commands, self.broadcast = receive_commands, broadcast
         self.intervals = intervals
         self._stop = threading.Event()
+        self._layouts_revision: object = None
 
     def stop(self) -> None:
         """Ask the loop to finish; safe from a signal handler or another thread."""
@@ -106,9 +107,7 @@ class ControlLoop:
                     self._safely(self._sync)
                     due["SYNC_INTERVAL"] = now + self.intervals["SYNC_INTERVAL"]
                 if now >= due["REGISTRY_INTERVAL"]:
-                    dialects = self._safely(self.controller.store.vehicle_dialects)
-                    if dialects is not None:
-                        self.controller.apply_dialects(dialects)
+                    self._safely(self._refresh_registry)
                     due["REGISTRY_INTERVAL"] = now + self.intervals.get("REGISTRY_INTERVAL", 10.0)
                 if now >= due["FLUSH_INTERVAL"]:
                     self._safely(self.controller.flush)
@@ -122,6 +121,16 @@ class ControlLoop:
             self._safely(self.controller.flush)
             self.link.stop()
             logger.info("control stopped; counters: %s", dict(self.controller.counters))
+
+    def _refresh_registry(self) -> None:
+        """Dialects from the vehicle registry; layouts again when one was edited."""
+        store = self.controller.store
+        self.controller.apply_dialects(store.vehicle_dialects())
+        revision = store.layouts_revision()
+        if revision != self._layouts_revision:
+            if self._layouts_revision is not None:
+                self.controller.layouts = store.load_layouts()
+            self._layouts_revision = revision
 
     def _sync(self) -> None:
         orders: list[ActiveOrder] = self.controller.store.active_orders()

@@ -51,6 +51,9 @@ class FakeStore:
     def vehicle_dialects(self) -> dict[int, str]:
         return {}
 
+    def layouts_revision(self) -> object:
+        return 0
+
     def request_dispatch(self) -> None:
         self.dispatches += 1
 

@@ -1,5 +1,6 @@
 import json
 from collections.abc import Iterator
+from dataclasses import replace
 
 import pytest
 
@@ -7,7 +8,7 @@ from control.capabilities import Capabilities
 from control.controller import Controller
 from control.execution import Phase
 from tests.control import fakes
-from tests.control.fakes import FakeStore, order, state, topic
+from tests.control.fakes import LINE, FakeStore, order, state, topic
 from tests.vda5050.support import validator
 
 STATE_TOPIC = "uagv/v2/sim/AGV-1/state"
@@ -698,3 +699,19 @@ def test_a_vehicle_with_the_legacy_dialect_gets_instant_actions_under_their_old_
     assert "actions" not in legacy
     assert legacy["instantActions"][0]["actionType"] == "startPause"
     assert standard["actions"][0]["actionType"] == "stopPause"
+
+
+def test_A6_max_speed_goes_out_only_to_vehicles_whose_factsheet_supports_it(
+    controller, sent
+) -> None:
+    controller.layouts["demo"] = replace(LINE, speed_limits={"bc": 0.5})
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    controller.fleet.by_pk(1).capabilities = Capabilities(
+        {}, optional_parameters=frozenset({"order.edges.maxSpeed"})
+    )
+
+    controller.sync([order()])
+
+    (message,) = orders_in(sent)
+    speeds = [e.get("maxSpeed", e.get("maximumSpeed")) for e in message["edges"]]
+    assert speeds == [None, 0.5, None]

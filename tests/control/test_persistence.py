@@ -3,11 +3,15 @@
 import pytest
 
 from control.controller import Controller
+from control.execution import OrderExecution, Window
+from control.order_messages import LoadJob, build_order
 from control.persistence import DjangoStore
+from maps.services import create_zone
 from orders import services
 from orders.models import VehicleCommand
 from robots.models import Vehicle
 from tests.control.fakes import state
+from tests.maps.zones_support import box
 
 pytestmark = pytest.mark.django_db(transaction=True)  # the store closes stale connections
 
@@ -52,3 +56,31 @@ def test_a_refused_command_keeps_its_reason() -> None:
     command.refresh_from_db()
     assert command.status == VehicleCommand.Status.REFUSED
     assert "not supported yet" in command.result
+
+
+def test_a_speed_zone_lowers_max_speed_in_the_sent_order(demo_map) -> None:
+    """Issue 4: zones change speeds in the orders control sends."""
+    create_zone(
+        map=demo_map,
+        zone_id="slow",
+        zone_type="SPEED_LIMIT",
+        max_speed=0.4,
+        vertices=box(3.5, -1, 5.5, 1),
+    )  # only over the aisle edge A1.0 - A2.0
+    layouts = DjangoStore().load_layouts()
+    execution = OrderExecution.plan(
+        transport_order_id=1,
+        vda_order_id="TO-1",
+        route=["A0.0", "A1.0", "A2.0", "A3.0"],
+        pickup="A1.0",
+    )
+
+    nodes, edges = build_order(
+        execution, layouts["demo"], Window(0, 3, 3), LoadJob("", "EPAL", "P", "D"), max_speed=True
+    )
+    _, unlimited = build_order(
+        execution, layouts["demo"], Window(0, 3, 3), LoadJob("", "EPAL", "P", "D"), max_speed=False
+    )
+
+    assert [e.max_speed for e in edges] == [None, 0.4, None]
+    assert [e.max_speed for e in unlimited] == [None, None, None]
