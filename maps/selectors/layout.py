@@ -3,7 +3,7 @@
 from typing import Any
 
 from maps.lif.export import export_lif
-from maps.models import Edge, Map, Node, Site, Station
+from maps.models import Edge, Map, Node, Site, Station, Zone
 
 
 def get_default_map() -> Map | None:
@@ -33,6 +33,16 @@ def layout_as_dict(*, map: Map) -> dict[str, Any]:
         for s in Station.objects.filter(map=map).select_related("node").order_by("station_id")
     ]
     parking = [s["node"] for s in stations if s["kind"] == Station.Kind.PARK]
+    zones = [
+        {
+            "id": z.zone_id,
+            "name": z.name or z.zone_id,
+            "type": z.zone_type,
+            "vertices": [[v["x"], v["y"]] for v in z.vertices],
+            "maxSpeed": z.max_speed,
+        }
+        for z in Zone.objects.filter(map=map, enabled=True).order_by("zone_id")
+    ]
     return {
         "mapId": map.map_id,
         "name": map.name,
@@ -40,6 +50,7 @@ def layout_as_dict(*, map: Map) -> dict[str, Any]:
         "edges": edges,
         "stations": stations,
         "parking": parking,
+        "zones": zones,
     }
 
 

@@ -114,6 +114,7 @@
   function drawLayout(root, layout) {
     root.setAttribute("viewBox", viewBoxFor(layout));
     const layers = {
+      zones: svg("g", { class: "zones" }, root),
       edges: svg("g", { class: "edges" }, root),
       stations: svg("g", { class: "stations" }, root),
       nodes: svg("g", { class: "nodes" }, root),
@@ -121,10 +122,24 @@
       vehicles: svg("g", { class: "vehicles" }, root),
     };
     drawArrowMarker(root);
+    drawZones(layers.zones, layout);
     drawEdges(layers.edges, layout);
     drawStations(layers.stations, layout);
     drawNodes(layers.nodes, layout);
     return layers;
+  }
+
+  // Enabled zones under the aisles, tinted by type; the tooltip names the zone and its rule.
+  function drawZones(layer, layout) {
+    for (const zone of layout.zones || []) {
+      const polygon = svg("polygon", {
+        class: `zone zone-${zone.type.toLowerCase().replace(/_/g, "-")}`,
+        points: zone.vertices.map(([x, y]) => `${fmt(x)},${fmt(-y)}`).join(" "),
+        "data-zone": zone.id,
+      }, layer);
+      const rule = zone.maxSpeed ? ` · ${zone.maxSpeed} m/s` : "";
+      svg("title", {}, polygon).textContent = `${zone.name} (${zone.type.toLowerCase()}${rule})`;
+    }
   }
 
   function drawArrowMarker(root) {

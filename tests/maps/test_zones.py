@@ -7,7 +7,7 @@ spurs 2 m above the top row (S-PICK-c at (3c, 11)), drops 2 m below the bottom r
 import pytest
 
 from maps.models import Map, Station, VehicleType, Zone
-from maps.selectors import edge_speed_limits, load_graph, validate_layout
+from maps.selectors import edge_speed_limits, layout_as_dict, load_graph, validate_layout
 from maps.services import (
     ZoneError,
     create_zone,
@@ -315,3 +315,21 @@ def test_stations_keep_working_when_zones_are_elsewhere(demo_map: Map) -> None:
 
     for station in Station.objects.filter(map=demo_map):
         assert graph.route("A0.0", station.node.node_id)
+
+
+def test_enabled_zones_are_part_of_the_live_page_layout(demo_map: Map) -> None:
+    create_zone(
+        map=demo_map,
+        zone_id="slow",
+        zone_type="SPEED_LIMIT",
+        max_speed=0.5,
+        vertices=box(0, 0, 4, 4),
+    )
+    create_zone(
+        map=demo_map, zone_id="off", zone_type="BLOCKED", vertices=box(5, 5, 6, 6), enabled=False
+    )
+
+    zones = layout_as_dict(map=demo_map)["zones"]
+
+    assert [(z["id"], z["type"], z["maxSpeed"]) for z in zones] == [("slow", "SPEED_LIMIT", 0.5)]
+    assert len(zones[0]["vertices"]) == 4
