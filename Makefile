@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint format venv browser clean bench-ingest bench-dispatch bench-routing
+.PHONY: demo test lint format venv browser clean bench-ingest bench-dispatch bench-routing bench-traffic
 
 $(STAMP): requirements.txt requirements-dev.txt
 	@command -v $(PYTHON) >/dev/null || { echo "Python 3.11 is required ($(PYTHON) not found)"; exit 1; }
@@ -44,6 +44,9 @@ bench-routing: $(STAMP)  ## LIF import of a 5,000-node site and route times (ben
 
 bench-dispatch: $(STAMP)  ## one dispatch cycle, batch assignment vs greedy (bench/results/dispatch.json)
 	$(PY) -m bench.dispatch $(BENCH_ARGS)
+
+bench-traffic: $(STAMP)  ## SIPP + ADG traffic in simulation, S1-S3 (bench/results/traffic_s*.json)
+	$(PY) -m bench.traffic $(BENCH_ARGS)
 
 format: $(STAMP)
 	$(VENV)/bin/ruff format .

@@ -1,0 +1,36 @@
+"""`python -m bench.traffic [--quick] [--scenario S1|S2|S3] [--hours H] [--seed N]`."""
+
+import argparse
+from typing import Any
+
+from bench.results import write
+from bench.traffic import scenarios
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description="Traffic manager benchmark (issue 6)")
+    parser.add_argument("--quick", action="store_true", help="a run of about a minute")
+    parser.add_argument("--scenario", choices=["S1", "S2", "S3"], action="append")
+    parser.add_argument("--hours", type=float, help="simulated hours for S1/S3")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--no-write", action="store_true", help="print only")
+    args = parser.parse_args()
+    chosen = args.scenario or ["S1", "S2", "S3"]
+    for name in chosen:
+        figures: dict[str, Any]
+        if name == "S2":
+            figures = scenarios.s2(quick=args.quick, seed=args.seed)
+        else:
+            runner = scenarios.s1 if name == "S1" else scenarios.s3
+            figures = runner(quick=args.quick, seed=args.seed, hours=args.hours)
+        figures["quick"] = args.quick
+        print(f"== {name}")
+        for key, value in figures.items():
+            print(f"  {key:32} {value}")
+        if not args.no_write:
+            path = write(f"traffic_{name.lower()}", figures)
+            print(f"  -> {path}")
+
+
+if __name__ == "__main__":
+    main()

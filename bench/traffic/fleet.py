@@ -1,0 +1,191 @@
+"""Running a fleet through a scenario: tasks, the traffic run, the ghost run and the figures."""
+
+from __future__ import annotations
+
+import math
+import random
+import statistics
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from bench.traffic.maps import GridMap
+from traffic.des import SimConfig, SimStats, Simulation, Tasks, free_flow_time
+from traffic.footprint import VehicleClass
+from traffic.layout import Layout
+from traffic.manager import TrafficManager
+from traffic.plans import Goal, ReleasePolicy
+from traffic.reservations import ReservationTable
+from traffic.sipp import heading_key, search
+
+VEHICLE = VehicleClass("amr", length=0.8, width=0.5, speed=1.0, rotation_speed=math.pi / 2)
+HANDLING = 5.0  # s per pick and per drop
+WEIGHT = 1.1  # SIPP heuristic weight: plans at most 10 % later than the earliest arrival
+
+
+def node_id(cell: tuple[int, int]) -> str:
+    """The layout node id of a grid cell."""
+    return f"{cell[0]},{cell[1]}"
+
+
+class WarehouseTasks:
+    """Transport orders: a random shelf cell (pick), then a free workstation (drop).
+
+    The pick sequence of each vehicle is fixed by the seed (the ghost run draws the same one);
+    the workstation is drawn among those no other open order is heading for, as a WMS would.
+    """
+
+    def __init__(self, grid: GridMap, seed: int, vehicles: Sequence[str], *, ghost: bool = False):
+        self.picks = [node_id(c) for c in grid.picks]
+        self.stations = [node_id(c) for c in grid.stations]
+        self._rng = {v: random.Random(seed * 7919 + i) for i, v in enumerate(vehicles)}
+        self._stations = random.Random(seed)
+        self._targeted: set[str] = set()
+        self._untasked: dict[str, str] = {}  # vehicles still standing where they started
+        self.ghost = ghost
+
+    def standing(self, starts: dict[str, str]) -> None:
+        """Vehicles standing at these nodes until their first task (their stations are taken)."""
+        self._untasked = dict(starts)
+
+    def next_goals(self, vehicle_id: str, node: str, now: float) -> list[Goal] | None:
+        """Pick, then drop at a workstation."""
+        pick = self._rng[vehicle_id].choice(self.picks)
+        self._untasked.pop(vehicle_id, None)
+        choices = self.stations
+        if not self.ghost:
+            taken = self._targeted | set(self._untasked.values())
+            choices = [s for s in self.stations if s not in taken and s != node]
+        drop = self._stations.choice(choices)
+        self._targeted.add(drop)
+        return [Goal(pick, HANDLING), Goal(drop, HANDLING)]
+
+    def finished(self, vehicle_id: str, goals: Sequence[Goal], now: float) -> None:
+        """The workstation is free for other orders again."""
+        self._targeted.discard(goals[-1].node)
+
+
+@dataclass
+class Run:
+    """One traffic run and what it measured."""
+
+    manager: TrafficManager
+    stats: SimStats
+    seconds: float
+    wall: float
+
+
+def fleet_manager(
+    layout: Layout,
+    starts: Sequence[tuple[str, float]],
+    *,
+    policy: ReleasePolicy,
+    max_expansions: int,
+    weight: float = WEIGHT,
+) -> TrafficManager:
+    """A manager with vehicles `v0..` standing at `starts` (node id, heading)."""
+    manager = TrafficManager(
+        layout, [VEHICLE], policy=policy, max_expansions=max_expansions, weight=weight
+    )
+    for i, (node, heading) in enumerate(starts):
+        manager.add_vehicle(f"v{i}", node, 0.0, heading=heading)
+    return manager
+
+
+def run(manager: TrafficManager, tasks: Tasks, seconds: float, config: SimConfig) -> Run:
+    """Execute `seconds` of simulated time."""
+    began = time.perf_counter()
+    stats = Simulation(manager, tasks, config).run(seconds)
+    return Run(manager, stats, seconds, time.perf_counter() - began)
+
+
+def ghost(
+    manager: TrafficManager,
+    starts: Sequence[tuple[str, float]],
+    tasks: Tasks,
+    seconds: float,
+    config: SimConfig,
+) -> int:
+    """Tasks finished in `seconds` when vehicles ignore each other (same tasks and delays).
+
+    Every vehicle drives its own tasks from its start as if alone: free-flow routes (turns and
+    handling included), the same delay probability and range per move.
+    """
+    layout = manager.layout
+    graph = manager.graphs[0]
+    empty = ReservationTable(layout.resource_count)
+    finished = 0
+    for i, (start, angle) in enumerate(starts):
+        name = f"v{i}"
+        rng = random.Random(config.seed * 100_003 + i)
+        node, heading, now = layout.node(start), heading_key(angle), 0.0
+        while now < seconds:
+            goals = tasks.next_goals(name, layout.node_ids[node], now)
+            if goals is None:
+                break
+            targets = [(layout.node(g.node), g.dwell) for g in goals]
+            path = search(graph, empty, -1, node, heading, now, math.inf, targets)
+            if path is None:
+                break
+            now = path.arrive[-1] + targets[-1][1]
+            for _ in range(len(path.nodes) - 1):
+                if rng.random() < config.delay_probability:
+                    now += rng.uniform(*config.delay_range)
+            if now <= seconds:
+                finished += 1
+            tasks.finished(name, goals, now)
+            node, heading = path.nodes[-1], path.headings[-1]
+    return finished
+
+
+def figures(result: Run, *, sample: int = 1500, seed: int = 0) -> dict[str, Any]:
+    """The flat figures of a run: throughput, waiting, safety net, timings."""
+    stats, manager = result.stats, result.manager
+    hours = result.seconds / 3600
+    tasks = stats.tasks
+    rng = random.Random(seed)
+    chosen = tasks if len(tasks) <= sample else rng.sample(tasks, sample)
+    waits = []
+    for task in chosen:
+        free = free_flow_time(manager, 0, task.start, task.heading, task.goals)
+        if math.isfinite(free):
+            waits.append(max(0.0, task.done - task.assigned - free - task.delay))
+    plan_ms = [s * 1e3 for s in stats.plan_seconds]
+    release_us = [s * 1e6 for s in stats.release_seconds]
+    return {
+        "vehicles": len(manager.vehicle_ids),
+        "simulated_hours": round(hours, 3),
+        "tasks_finished": len(tasks),
+        "throughput_per_hour": round(len(tasks) / hours, 1) if hours else 0.0,
+        "wait_per_order_mean_s": _round(statistics.fmean(waits) if waits else 0.0),
+        "wait_per_order_p95_s": _round(_pct(waits, 95)),
+        "decision_point_stop_mean_s": _round(statistics.fmean(stats.waits) if stats.waits else 0),
+        "decision_point_stop_p95_s": _round(_pct(stats.waits, 95)),
+        "deadlocks_wait_cycles": stats.wait_cycles,
+        "deadlocks_stalls": stats.stalls,
+        "waits_over_300s_behind_a_driving_vehicle": stats.long_waits,
+        "collisions": stats.collisions,
+        "plan_failures": stats.plan_failures,
+        "moves": stats.moves,
+        "delayed_moves": stats.delays,
+        "plan_ms_p50": _round(_pct(plan_ms, 50)),
+        "plan_ms_p95": _round(_pct(plan_ms, 95)),
+        "plan_ms_max": _round(max(plan_ms, default=0.0)),
+        "release_us_p50": _round(_pct(release_us, 50)),
+        "release_us_p95": _round(_pct(release_us, 95)),
+        "release_us_p99": _round(_pct(release_us, 99)),
+        "release_us_max": _round(max(release_us, default=0.0)),
+        "wall_s": _round(result.wall),
+    }
+
+
+def _pct(values: Sequence[float], q: float) -> float:
+    if not values:
+        return 0.0
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, int(len(ordered) * q / 100))]
+
+
+def _round(value: float) -> float:
+    return round(value, 3)

@@ -1,0 +1,130 @@
+"""The three scenarios of the traffic benchmark (issue 6 targets in the comments)."""
+
+from __future__ import annotations
+
+import random
+import time
+from collections.abc import Sequence
+from typing import Any
+
+from bench.traffic.fleet import (
+    WarehouseTasks,
+    figures,
+    fleet_manager,
+    ghost,
+    node_id,
+    run,
+)
+from bench.traffic.maps import GridMap, LorrInstance, lorr, warehouse
+from traffic.des import SimConfig
+from traffic.layout import Layout
+from traffic.plans import Goal, ReleasePolicy
+
+POLICY = ReleasePolicy(max_steps=4, max_distance=4.0, braking_distance=1.0)
+S2_WEIGHT = 1.0  # the 32×32 map is small: plan exactly
+S2_BASE = 4  # base steps ahead
+
+
+def warehouse_scenario(
+    name: str, grid: GridMap, vehicles: int, hours: float, seed: int, *, max_expansions: int
+) -> dict[str, Any]:
+    """Vehicles start at distinct workstations and run pick -> drop orders for `hours`."""
+    began = time.perf_counter()
+    layout = Layout.grid(grid.free, parking=grid.stations)
+    rng = random.Random(seed)
+    starts = [(node_id(c), 0.0) for c in rng.sample(list(grid.stations), vehicles)]
+    manager = fleet_manager(layout, starts, policy=POLICY, max_expansions=max_expansions)
+    setup = time.perf_counter() - began
+    config = SimConfig(seed=seed)
+    seconds = hours * 3600
+    tasks = WarehouseTasks(grid, seed, manager.vehicle_ids)
+    tasks.standing({f"v{i}": node for i, (node, _) in enumerate(starts)})
+    result = run(manager, tasks, seconds, config)
+    out = figures(result, seed=seed)
+    ghost_tasks = WarehouseTasks(grid, seed, manager.vehicle_ids, ghost=True)
+    ghosted = ghost(manager, starts, ghost_tasks, seconds, config)
+    out["ghost_throughput_per_hour"] = round(ghosted / hours, 1)
+    out["rho"] = round(len(result.stats.tasks) / ghosted, 3) if ghosted else 0.0
+    out.update(
+        scenario=name,
+        map=f"{grid.width}x{grid.height}",
+        free_cells=len(grid.free),
+        workstations=len(grid.stations),
+        seed=seed,
+        delay="5% of moves +5-30 s",
+        setup_s=round(setup, 2),
+    )
+    return out
+
+
+def s1(*, quick: bool, seed: int, hours: float | None = None) -> dict[str, Any]:
+    """S1: warehouse-10-20-10-2-1 pattern, 100 vehicles (rho >= 0.85, plan p95 <= 25 ms)."""
+    grid = warehouse()
+    return warehouse_scenario(
+        "S1", grid, 100, hours or (0.15 if quick else 8.0), seed, max_expansions=60_000
+    )
+
+
+def s3(*, quick: bool, seed: int, hours: float | None = None) -> dict[str, Any]:
+    """S3: 1,000 vehicles on a 500×140 warehouse (targets: rho >= 0.7, plan p95 <= 150 ms)."""
+    grid = warehouse(block_cols=36, block_rows=45, margin=51, station_cols=8)
+    vehicles = 150 if quick else 1000
+    return warehouse_scenario(
+        "S3", grid, vehicles, hours or (0.1 if quick else 0.25), seed, max_expansions=150_000
+    )
+
+
+class LorrTasks:
+    """LoRR 2023 rules: agent i's k-th errand is task (k·team + i) mod M, revealed on finish."""
+
+    def __init__(self, instance: LorrInstance) -> None:
+        self.instance = instance
+        self.done = [0] * len(instance.starts)
+
+    def next_goals(self, vehicle_id: str, node: str, now: float) -> list[Goal] | None:
+        """The agent's current errand."""
+        agent = int(vehicle_id[1:])
+        cell = self.instance.grid.cell(self.instance.errand(agent, self.done[agent]))
+        return [Goal(node_id(cell))]
+
+    def finished(self, vehicle_id: str, goals: Sequence[Goal], now: float) -> None:
+        """Reveal the next errand."""
+        self.done[int(vehicle_id[1:])] += 1
+
+
+def s2(*, quick: bool, seed: int, instances: Sequence[str] = ()) -> dict[str, Any]:
+    """S2: LoRR random-32-32-20, errands within the step limit vs best-known (target >= 60 %)."""
+    names = list(instances) or (["MR23-I-04"] if quick else ["MR23-I-04", "MR23-I-03"])
+    out: dict[str, Any] = {"scenario": "S2", "seed": seed, "rules": "LoRR 2023, no delays"}
+    for name in names:
+        instance = lorr(name)
+        layout = Layout.grid(instance.grid.free)
+        starts = [(node_id(instance.grid.cell(c)), 0.0) for c in instance.starts]
+        policy = ReleasePolicy(max_steps=S2_BASE, max_distance=float(S2_BASE))
+        manager = fleet_manager(
+            layout, starts, policy=policy, max_expansions=20_000, weight=S2_WEIGHT
+        )
+        config = SimConfig(
+            seed=seed, delay_probability=0.0, partial=True, retry_after=1.0, replan_budget=8
+        )
+        result = run(manager, LorrTasks(instance), float(instance.steps), config)
+        done = sum(1 for t in result.stats.tasks if t.done <= instance.steps)
+        figs = figures(result, seed=seed)
+        key = name.removeprefix("MR23-").replace("-", "").lower()
+        out.update(
+            {
+                f"{key}_agents": len(instance.starts),
+                f"{key}_steps": instance.steps,
+                f"{key}_errands": done,
+                f"{key}_best_known": instance.best_known,
+                f"{key}_share_of_best": round(done / instance.best_known, 3),
+                f"{key}_collisions": figs["collisions"],
+                f"{key}_deadlocks_wait_cycles": figs["deadlocks_wait_cycles"],
+                f"{key}_deadlocks_stalls": figs["deadlocks_stalls"],
+                f"{key}_plan_failures": figs["plan_failures"],
+                f"{key}_plan_ms_p95": figs["plan_ms_p95"],
+                f"{key}_release_us_p95": figs["release_us_p95"],
+                f"{key}_wall_s": figs["wall_s"],
+            }
+        )
+    return out

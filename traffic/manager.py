@@ -1,0 +1,435 @@
+"""The traffic manager: plans routes with SIPP and releases them step by step (ADG execution).
+
+Call pattern (all in the control process, under its lock):
+
+- `add_vehicle(id, node, now)` once per vehicle: it stands there, holding the node until planned;
+- `plan(id, goals, now)` for a transport order: a timed route through the goals; the vehicle's
+  VDA 5050 order is `plan.nodes` (route index i has sequence id 2·i), released up to
+  `plan.releases[...].base_end`, the rest horizon;
+- `on_progress(id, passed_index, now)` for every state message where lastNodeSequenceId moved:
+  clears what the vehicle left and returns the base extensions (this vehicle's and any vehicle
+  that was waiting for it), each to be sent as an order update. Costs microseconds;
+- `replan(id, now)` re-plans the unreleased part (the base is irrevocable), e.g. after a delay;
+- `park(id, now)` sends a vehicle without a task to the nearest free parking node;
+- `block(id, now)` / `restore(...)` make a vehicle in error, manual mode or offline a static
+  obstacle and back; `waiting_for(id)` tells the UI whom a vehicle waits for.
+
+Step i of a route (i >= 1) is the move from node i-1 to node i: it holds the segment (cleared when
+the vehicle reports node i) and node i (cleared when it reports node i+1). The last node is held
+until the next plan. Base release extends over the longest prefix whose holds have no other
+vehicle queued ahead (see `traffic.reservations`), capped by the `ReleasePolicy`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from traffic.footprint import ConflictSets, VehicleClass
+from traffic.layout import Layout
+from traffic.plans import Goal, Plan, Release, ReleasePolicy, Vehicle
+from traffic.reservations import INF, Hold, ReservationTable
+from traffic.sipp import ANY_HEADING, ClassGraph, Path, heading_key, search
+from traffic.timing import find_cycles, lower_bounds, propagate
+
+__all__ = ["Goal", "NoPlanError", "Plan", "Release", "ReleasePolicy", "TrafficManager"]
+
+
+class NoPlanError(Exception):
+    """No collision-free route to the goals exists now (try again later, or park)."""
+
+
+class TrafficManager:
+    """Plans, reservations and base releases for every vehicle of one layout."""
+
+    def __init__(
+        self,
+        layout: Layout,
+        classes: Sequence[VehicleClass] = (VehicleClass(),),
+        *,
+        policy: ReleasePolicy | None = None,
+        conflicts: ConflictSets | None = None,
+        max_expansions: int = 200_000,
+        weight: float = 1.0,
+        replan_after: float = 5.0,
+        retime_slack: float = 2.0,
+    ) -> None:
+        self.layout = layout
+        self.classes = tuple(classes)
+        self.policy = policy or ReleasePolicy()
+        self.conflicts = conflicts or ConflictSets(layout, self.classes)
+        self.graphs = [ClassGraph(layout, c) for c in self.classes]
+        self.table = ReservationTable(layout.resource_count)
+        self.max_expansions = max_expansions
+        self.weight = weight  # heuristic weight of SIPP (1: earliest arrival)
+        self.replan_after = replan_after  # s at a decision point before tick() re-plans
+        self.retime_slack = retime_slack  # s a plan may run early before tick() re-times it
+        self._vehicles: list[Vehicle] = []
+        self._index: dict[str, int] = {}
+        self._waiters: dict[int, set[int]] = {}
+        self._segment = {
+            (e.start, e.end): layout.segment_resource(i) for i, e in enumerate(layout.edges)
+        }
+        self._length = {(e.start, e.end): e.length for e in layout.edges}
+
+    # -- fleet ------------------------------------------------------------------------------
+
+    def add_vehicle(
+        self,
+        vehicle_id: str,
+        node: str,
+        now: float,
+        *,
+        heading: float | None = None,
+        vehicle_class: int = 0,
+    ) -> None:
+        """Register a vehicle standing at `node` (it holds the node until it gets a plan)."""
+        if vehicle_id in self._index:
+            raise ValueError(f"vehicle {vehicle_id} is already known")
+        n = self.layout.node(node)
+        idx = len(self._vehicles)
+        if any(h.vehicle != idx for h in self.table.blocked[n]):
+            raise ValueError(f"node {node} is reserved by another vehicle")
+        key = ANY_HEADING if heading is None else heading_key(heading)
+        v = Vehicle(vehicle_id, idx, vehicle_class, n, key, now)
+        hold = Hold(idx, n, 0, now, INF, self.conflicts.of(vehicle_class, n))
+        self.table.add_released(hold)
+        v.node_holds = [hold]
+        self._vehicles.append(v)
+        self._index[vehicle_id] = idx
+
+    def vehicle(self, vehicle_id: str) -> Vehicle:
+        """The traffic state of a vehicle (read it, do not change it)."""
+        return self._vehicles[self._index[vehicle_id]]
+
+    @property
+    def vehicle_ids(self) -> list[str]:
+        """Every registered vehicle."""
+        return [v.name for v in self._vehicles]
+
+    # -- planning -----------------------------------------------------------------------------
+
+    def plan(
+        self, vehicle_id: str, goals: Sequence[Goal] | str, now: float, *, partial: bool = False
+    ) -> Plan:
+        """Plan `vehicle_id` through `goals` (a node id, or goals with dwell times).
+
+        A vehicle at the end of its route gets a new plan (new `plan_id`, route index 0 is where
+        it stands); a vehicle still driving keeps its released base and gets a new horizon from
+        its decision point. With `partial` (single goal only), an unreachable goal yields a plan
+        to the nearest node where the vehicle may wait (`plan.complete` is False).
+        Raises NoPlanError when no plan exists now.
+        """
+        v = self.vehicle(vehicle_id)
+        wanted = [Goal(goals)] if isinstance(goals, str) else list(goals)
+        if not wanted:
+            raise ValueError("at least one goal is needed")
+        if partial and len(wanted) > 1:
+            raise ValueError("partial plans take a single goal")
+        targets = [(self.layout.node(g.node), g.dwell) for g in wanted]
+        plan = self._plan(v, targets, now, partial)
+        if plan is None:
+            raise NoPlanError(f"no route for {vehicle_id} to {wanted[-1].node} now")
+        return plan
+
+    def replan(self, vehicle_id: str, now: float) -> Plan | None:
+        """Re-plan the unreleased rest of the route to the same goals; None if kept as it was."""
+        v = self.vehicle(vehicle_id)
+        v.replanned_at = now
+        remaining = [g for g, stop in zip(v.goals, v.stops, strict=True) if stop > v.base]
+        if not remaining or v.static:
+            return None
+        partial = not v.complete and len(remaining) == 1
+        return self._plan(v, remaining, now, partial)
+
+    def park(self, vehicle_id: str, now: float, *, candidates: int = 8) -> Plan:
+        """Send a vehicle to the nearest parking node where it may stay (NoPlanError if none)."""
+        v = self.vehicle(vehicle_id)
+        here = v.route[v.base]
+        graph = self.graphs[v.cls]
+        if here in self.layout.parking and v.base == len(v.route) - 1:
+            return v.snapshot(self.layout, ())
+        nearest = sorted(self.layout.parking, key=lambda p: (graph.to(p)[here], p))
+        for p in nearest[:candidates]:
+            if graph.to(p)[here] == INF:
+                break
+            plan = self._plan(v, [(p, 0.0)], now, False)
+            if plan is not None:
+                return plan
+        raise NoPlanError(f"no free parking node reachable for {vehicle_id}")
+
+    def _plan(
+        self, v: Vehicle, goals: list[tuple[int, float]], now: float, partial: bool
+    ) -> Plan | None:
+        if v.static:
+            return None
+        graph = self.graphs[v.cls]
+        b = v.base
+        start = v.route[b]
+        t0 = max(now, v.ready_at) if v.passed == b else now + self._remaining(v, graph)
+        deadline = self.table.first_other_start(start, v.idx)
+        path = search(
+            graph,
+            self.table,
+            v.idx,
+            start,
+            v.headings[b],
+            t0,
+            deadline,
+            goals,
+            partial=partial,
+            max_expansions=self.max_expansions,
+            weight=self.weight,
+        )
+        if path is None:
+            return None
+        releases = self._commit(v, path, goals, now, new=b == len(v.route) - 1)
+        return v.snapshot(self.layout, releases)
+
+    def _remaining(self, v: Vehicle, graph: ClassGraph) -> float:
+        """Seconds the vehicle still needs to its decision point, driving without waiting."""
+        seconds = 0.0
+        for i in range(v.passed, v.base):
+            seconds += graph.turn(v.headings[i], v.headings[i + 1])
+            seconds += graph.travel[(v.route[i], v.route[i + 1])]
+        return seconds
+
+    def _commit(
+        self, v: Vehicle, path: Path, goals: list[tuple[int, float]], now: float, *, new: bool
+    ) -> list[Release]:
+        b = v.base
+        table, conflicts = self.table, self.conflicts
+        if new:
+            v.restart(path.nodes[0])
+            b = 0
+        else:
+            for i in range(len(v.route) - 1, b, -1):
+                edge = v.edge_holds[i]
+                if edge is not None:
+                    table.remove(edge)
+                table.remove(v.node_holds[i])
+            v.truncate(b)
+        v.node_holds[b].end = path.arrive[1] if len(path.nodes) > 1 else INF
+        for j in range(1, len(path.nodes)):
+            i = b + j
+            u, n = path.nodes[j - 1], path.nodes[j]
+            seg = self._segment[(u, n)]
+            dep, end = path.depart[j - 1], path.arrive[j + 1] if j + 1 < len(path.nodes) else INF
+            edge = Hold(v.idx, seg, i, dep, path.arrive[j], conflicts.of(v.cls, seg))
+            node = Hold(v.idx, n, i, dep, end, conflicts.of(v.cls, n))
+            table.add(edge)
+            table.add(node)
+            v.append(
+                n,
+                path.arrive[j],
+                path.depart[j],
+                path.headings[j],
+                (edge, node),
+                self._length[(u, n)],
+            )
+        v.depart[b] = path.depart[0]
+        v.goals = goals
+        stops = [b + s for s in path.stops]
+        v.stops = stops + [len(v.route) + 10**9] * (len(goals) - len(stops))
+        v.complete = path.complete
+        if b in stops[:1] and v.passed == b and not new:
+            v.ready_at = max(v.ready_at, v.arrive[b] + goals[0][1])
+        releases: list[Release] = []
+        own = self._extend(v, now)
+        if own is not None:
+            releases.append(own)
+        releases.extend(self._wake(v.idx, now))
+        return releases
+
+    # -- execution ----------------------------------------------------------------------------
+
+    def on_progress(self, vehicle_id: str, passed: int, now: float) -> list[Release]:
+        """The vehicle reports it reached route index `passed`: clear, then release more.
+
+        Returns the base extensions this caused, this vehicle's first. Raises ValueError if the
+        vehicle reports a node beyond its released base.
+        """
+        v = self.vehicle(vehicle_id)
+        if passed <= v.passed:
+            return []
+        if passed > v.base:
+            raise ValueError(f"{vehicle_id} passed index {passed} beyond its base {v.base}")
+        table = self.table
+        for i in range(v.passed + 1, passed + 1):
+            edge = v.edge_holds[i]
+            if edge is not None:
+                table.remove(edge)
+        for i in range(v.passed, passed):
+            table.remove(v.node_holds[i])
+        v.passed = passed
+        v.last_progress = now
+        for goal, stop in zip(v.goals, v.stops, strict=True):
+            if stop == passed:
+                v.ready_at = now + goal[1]
+        releases: list[Release] = []
+        own = self._extend(v, now)
+        if own is not None:
+            releases.append(own)
+        releases.extend(self._wake(v.idx, now))
+        return releases
+
+    def _extend(self, v: Vehicle, now: float) -> Release | None:
+        """Extend the base over the longest releasable prefix within the policy's caps."""
+        last = len(v.route) - 1
+        b = start = v.base
+        table, policy = self.table, self.policy
+        was_blocked, v.blocked_by = v.blocked_by >= 0, -1
+        reach = max(policy.max_distance, policy.braking_distance)
+        while b < last and not v.static:
+            step = b + 1
+            if b > v.passed and (
+                step - v.passed > policy.max_steps or v.metres[step] - v.metres[v.passed] > reach
+            ):
+                break
+            edge, node = v.edge_holds[step], v.node_holds[step]
+            blocker = (table.blocker(edge) if edge is not None else None) or table.blocker(node)
+            if blocker is not None:
+                v.blocked_by = blocker.vehicle
+                if not was_blocked:
+                    v.blocked_since = now
+                self._waiters.setdefault(blocker.vehicle, set()).add(v.idx)
+                break
+            if edge is not None:
+                table.release(edge)
+            table.release(node)
+            b = step
+        if b == start:
+            return None
+        v.base = b
+        return Release(v.name, v.plan_id, b, last)
+
+    def _wake(self, idx: int, now: float) -> list[Release]:
+        """Re-check the vehicles that waited for vehicle `idx`."""
+        releases = []
+        for w in self._waiters.pop(idx, ()):
+            release = self._extend(self._vehicles[w], now)
+            if release is not None:
+                releases.append(release)
+        return releases
+
+    def tick(self, now: float, *, budget: int = 2) -> list[Release]:
+        """Housekeeping at about 1 Hz (milliseconds): re-time, then re-plan waiting vehicles.
+
+        Re-timing pushes planned times that delays made too early (`traffic.timing`); then up to
+        `budget` vehicles stopped at their decision point for `replan_after` seconds get their
+        unreleased steps re-planned, which may let them pass ahead of a late vehicle.
+        """
+        pushes = []
+        for v in self._vehicles:
+            bound = lower_bounds(v, self.graphs[v.cls], now, self.retime_slack)
+            if bound is not None:
+                pushes.append((bound[0], v.idx, bound[1]))
+        propagate(self._vehicles, self.table, self.graphs, pushes)
+        waiting = sorted(
+            (v.blocked_since, v.idx)
+            for v in self._vehicles
+            if v.blocked_by >= 0
+            and v.base == v.passed
+            and now - v.blocked_since >= self.replan_after
+            and now - v.replanned_at >= self.replan_after
+        )
+        releases: list[Release] = []
+        for _, idx in waiting[:budget]:
+            plan = self.replan(self._vehicles[idx].name, now)
+            if plan is not None:
+                releases.extend(plan.releases)
+        return releases
+
+    # -- queries --------------------------------------------------------------------------------
+
+    def plan_of(self, vehicle_id: str) -> Plan:
+        """The vehicle's current plan."""
+        return self.vehicle(vehicle_id).snapshot(self.layout, ())
+
+    def release_of(self, vehicle_id: str) -> Release:
+        """The vehicle's current base: released up to `base_end`."""
+        v = self.vehicle(vehicle_id)
+        return Release(v.name, v.plan_id, v.base, len(v.route) - 1)
+
+    def waiting_for(self, vehicle_id: str) -> list[str]:
+        """The vehicles whose holds keep `vehicle_id` from extending its base (for the UI)."""
+        v = self.vehicle(vehicle_id)
+        step = v.base + 1
+        if step >= len(v.route) or v.base > v.passed:
+            return []
+        found: dict[int, None] = {}
+        for hold in (v.edge_holds[step], v.node_holds[step]):
+            if hold is not None:
+                for other in self.table.blockers(hold):
+                    found[other.vehicle] = None
+        return [self._vehicles[i].name for i in found]
+
+    def wait_for_graph(self) -> dict[str, list[str]]:
+        """Who waits for whom, for every vehicle stopped at its decision point."""
+        return {v.name: self.waiting_for(v.name) for v in self._vehicles}
+
+    def wait_cycles(self) -> list[list[str]]:
+        """Cycles in the wait-for graph (a deadlock; must never happen)."""
+        return find_cycles(self.wait_for_graph())
+
+    def stalled(self, now: float, after: float = 60.0) -> list[str]:
+        """Vehicles with route left that made no progress for `after` s, and neither did the
+        vehicle at the end of their wait-for chain (no progress anywhere: must never happen)."""
+        found = []
+        for v in self._vehicles:
+            if v.static or v.passed >= len(v.route) - 1 or now - v.last_progress <= after:
+                continue
+            root, seen = v, {v.idx}
+            while root.blocked_by >= 0 and root.blocked_by not in seen:
+                root = self._vehicles[root.blocked_by]
+                seen.add(root.idx)
+            if now - root.last_progress > after:
+                found.append(v.name)
+        return found
+
+    # -- vehicles out of automatic mode ---------------------------------------------------------
+
+    def block(self, vehicle_id: str, now: float) -> list[str]:
+        """Make a vehicle a static obstacle (error, manual mode, offline).
+
+        Its unreleased steps are dropped, what it holds is held for good, and every vehicle that
+        was queued behind it is re-planned around it. Returns the re-planned vehicles.
+        """
+        v = self.vehicle(vehicle_id)
+        if v.static:
+            return []
+        for i in range(len(v.route) - 1, v.base, -1):
+            edge = v.edge_holds[i]
+            if edge is not None:
+                self.table.remove(edge)
+            self.table.remove(v.node_holds[i])
+        v.truncate(v.base)
+        v.goals, v.stops = [], []
+        v.static = True
+        held = [h for h in [*v.edge_holds, *v.node_holds] if h is not None and h.index >= v.passed]
+        affected: dict[int, None] = {}
+        for hold in held:
+            hold.end = INF
+            for r in hold.conflicts:
+                for other in self.table.blocked[r]:
+                    if other.vehicle != v.idx and not other.released:
+                        affected[other.vehicle] = None
+        for w in affected:
+            self.replan(self._vehicles[w].name, now)
+        self._waiters.pop(v.idx, None)
+        return [self._vehicles[w].name for w in affected]
+
+    def restore(self, vehicle_id: str, node: str, now: float) -> None:
+        """Put a blocked vehicle back under traffic control, standing at `node`."""
+        v = self.vehicle(vehicle_id)
+        n = self.layout.node(node)
+        for hold in [*v.edge_holds, *v.node_holds]:
+            if hold is not None and hold in self.table.blocked[hold.resource]:
+                self.table.remove(hold)
+        v.restart(n)
+        hold = Hold(v.idx, n, 0, now, INF, self.conflicts.of(v.cls, n))
+        self.table.add_released(hold)
+        v.node_holds = [hold]
+        v.static = False
+        v.last_progress = now
+        for w in {h.vehicle for h in self.table.blocked[n] if h.vehicle != v.idx}:
+            self.replan(self._vehicles[w].name, now)

@@ -1,0 +1,318 @@
+"""Safe Interval Path Planning (Phillips & Likhachev 2011) on a layout, with turning and stops.
+
+The search state is (node, heading, safe interval, goal stage); its value is the earliest arrival
+in that interval. A move u -> v departing at t and arriving at t + tau needs:
+
+- the vehicle's interval at u to last until t + tau (it occupies u until it reaches v);
+- the segment u-v to be free during [t, t + tau];
+- v to be free from t on (the step into v is claimed when the vehicle sets off).
+
+Waiting is implicit (departing later within the interval), turning on the spot costs
+angle / rotation speed before departure. Goals are visited in order with a dwell time each (pick,
+drop); the last goal needs an interval that never ends, because the vehicle stays there until it
+gets its next plan. Heuristic: the exact time for the rest of the tour, turning and dwells
+included, as if the vehicle were alone (reverse-Dijkstra tables over (node, heading) states).
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from array import array
+from collections import OrderedDict
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from traffic.footprint import VehicleClass
+from traffic.layout import Layout
+from traffic.reservations import ReservationTable
+
+INF = math.inf
+ANY_HEADING = -1  # a heading key that turns for free (a vehicle whose heading is unknown)
+HEADING_STEPS = 3600  # heading keys per full turn (0.1°)
+TABLE_CACHE = 256  # heuristic tables kept per vehicle class
+ZERO = 1e-9  # s: a zero-cost edge in the sparse graph (scipy drops explicit zeros)
+
+
+@dataclass(frozen=True)
+class Path:
+    """A timed route: node indices with arrival and departure times, and where the goals are."""
+
+    nodes: list[int]
+    arrive: list[float]
+    depart: list[float]  # inf for the last node
+    headings: list[int]  # heading key on arrival (ANY_HEADING for an unknown start heading)
+    stops: list[int]  # route index at which each goal was served
+    complete: bool = True  # False: a partial path towards an unreachable goal
+
+
+class ClassGraph:
+    """The layout as one vehicle class drives it: successors with travel times and headings.
+
+    Heuristic tables are exact travel times to a goal over (node, heading) states, turning
+    included but other vehicles ignored: one reverse Dijkstra (scipy) per goal, cached.
+    """
+
+    def __init__(self, layout: Layout, vehicle: VehicleClass, *, cache: int = TABLE_CACHE):
+        self.layout = layout
+        self.vehicle = vehicle
+        self.turning = vehicle.rotation_speed is not None
+        self.succ: list[list[tuple[int, int, float, int]]] = [[] for _ in layout.node_ids]
+        self.travel: dict[tuple[int, int], float] = {}
+        self.states: list[dict[int, int]] = [{} for _ in layout.node_ids]  # node -> key -> state
+        self._turns: dict[tuple[int, int], float] = {}
+        count = 0
+        for e, edge in enumerate(layout.edges):
+            speeds = [s for s in (vehicle.speed, edge.max_speed) if s]
+            tau = edge.length / min(speeds)
+            key = heading_key(edge.heading) if self.turning else 0
+            self.succ[edge.start].append((edge.end, layout.segment_resource(e), tau, key))
+            self.travel[(edge.start, edge.end)] = tau
+            if key not in self.states[edge.end]:
+                self.states[edge.end][key] = count
+                count += 1
+        for keys in self.states:
+            if not keys:
+                keys[0] = count  # a node nobody drives into still gets a state
+                count += 1
+        self.state_count = count
+        arrive = count  # arrive(v) = count + v, the goal "whatever the heading"
+        reverse: list[tuple[int, int, float]] = []
+        for v, keys in enumerate(self.states):
+            for key, state in keys.items():
+                reverse.append((arrive + v, state, 0.0))
+                for w, _, tau, w_key in self.succ[v]:
+                    cost = self.turn(key, w_key) + tau
+                    reverse.append((self.states[w][w_key], state, cost))
+        size = count + layout.node_count
+        rows, cols, costs = zip(*reverse, strict=True) if reverse else ((), (), ())
+        weights = np.maximum(np.asarray(costs, dtype=float), ZERO)  # explicit zeros are no edge
+        self._reverse = csr_matrix((weights, (rows, cols)), shape=(size, size))
+        self._reverse.sum_duplicates()
+        self._tables: OrderedDict[tuple[tuple[int, float], ...], array[float]] = OrderedDict()
+        self._cache = cache
+
+    def to(self, goal: int) -> array[float]:
+        """Seconds to `goal` from every (node, heading) state, alone on the layout (cached)."""
+        return self.tour([(goal, 0.0)])[0]
+
+    def tour(self, goals: Sequence[tuple[int, float]]) -> list[array[float]]:
+        """Per goal stage, seconds to finish the tour (goals with dwells) from every state.
+
+        The table of stage j starts the reverse Dijkstra at goal j's states, each seeded with the
+        dwell plus the rest of the tour from that heading, so it is exact (others ignored).
+        """
+        tables: list[array[float]] = []
+        following: array[float] | None = None
+        for j in range(len(goals) - 1, -1, -1):
+            key = tuple(goals[j:])
+            table = self._tables.get(key)
+            if table is None:
+                table = self._dijkstra(goals[j][0], goals[j][1], following)
+                self._tables[key] = table
+                if len(self._tables) > self._cache:
+                    self._tables.popitem(last=False)
+            else:
+                self._tables.move_to_end(key)
+            tables.append(table)
+            following = table
+        tables.reverse()
+        return tables
+
+    def _dijkstra(self, goal: int, dwell: float, following: array[float] | None) -> array[float]:
+        """Reverse Dijkstra (scipy, C speed) from goal's arrival node.
+
+        For an intermediate goal the arrival node's edges into the goal's states temporarily
+        weigh the dwell plus the rest of the tour from each heading.
+        """
+        graph = self._reverse
+        source = self.state_count + goal
+        lo, hi = graph.indptr[source], graph.indptr[source + 1]
+        saved = graph.data[lo:hi].copy()
+        if following is not None:
+            rest = np.frombuffer(following, dtype=float)[graph.indices[lo:hi]]
+            graph.data[lo:hi] = np.maximum(dwell + rest, ZERO)
+        try:
+            seconds = dijkstra(graph, directed=True, indices=source)
+        finally:
+            graph.data[lo:hi] = saved
+        table = array("d")
+        table.frombytes(np.ascontiguousarray(seconds[: self.state_count]).tobytes())
+        if following is None:
+            for state in self.states[goal].values():
+                table[state] = 0.0
+        return table
+
+    def cost_to(self, table: array[float], node: int, key: int) -> float:
+        """Seconds from `node` with heading `key` (ANY_HEADING: the best heading) via `table`."""
+        keys = self.states[node]
+        if key in keys:
+            return table[keys[key]]
+        best = min(table[s] for s in keys.values())  # a lower bound
+        for w, _, tau, w_key in self.succ[node]:
+            best = min(best, self.turn(key, w_key) + tau + table[self.states[w][w_key]])
+        return best
+
+    def turn(self, start: int, end: int) -> float:
+        """Seconds to turn on the spot from heading key `start` to `end`."""
+        if start < 0 or not self.turning or start == end:
+            return 0.0
+        cached = self._turns.get((start, end))
+        if cached is None:
+            steps = abs(end - start) % HEADING_STEPS
+            angle = min(steps, HEADING_STEPS - steps) * math.tau / HEADING_STEPS
+            cached = self._turns[(start, end)] = angle / (self.vehicle.rotation_speed or 1.0)
+        return cached
+
+
+def heading_key(angle: float) -> int:
+    """An angle (rad) as an integer key, 0.1° resolution."""
+    return round(math.degrees(angle) * 10) % HEADING_STEPS
+
+
+def search(
+    graph: ClassGraph,
+    table: ReservationTable,
+    vehicle: int,
+    start: int,
+    heading: int,
+    t0: float,
+    deadline: float,
+    goals: Sequence[tuple[int, float]],
+    *,
+    partial: bool = False,
+    max_expansions: int = 200_000,
+    weight: float = 1.0,
+) -> Path | None:
+    """The earliest-arriving path through `goals` (node, dwell) for `vehicle`, or None.
+
+    The vehicle stands at `start` with `heading` from `t0` and must leave it before `deadline`
+    (another vehicle is queued there). With `partial`, a path that cannot reach the last goal
+    ends instead at the reachable node nearest to it where the vehicle may stay. A `weight`
+    above 1 inflates the heuristic (weighted A*: faster, at most that factor from the earliest
+    arrival).
+    """
+    tables = graph.tour(goals)
+    last = len(goals) - 1
+    h_start = graph.cost_to(tables[0], start, heading)
+    if h_start == INF and not partial:
+        return None
+    cache: dict[int, list[tuple[float, float]]] = {}
+
+    def intervals(resource: int) -> list[tuple[float, float]]:
+        found = cache.get(resource)
+        if found is None:
+            found = cache[resource] = table.safe_intervals(resource, vehicle)
+        return found
+
+    final = goals[-1][0]
+    gaps = intervals(final)
+    if (not gaps or gaps[-1][1] != INF) and not partial:
+        return None  # someone stays on the last goal for good
+    succ, turn, cost_to, states = graph.succ, graph.turn, graph.cost_to, graph.states
+    start_key = (start, heading, -1, 0)
+    parents: dict[tuple[int, int, int, int], tuple[tuple[int, int, int, int] | None, float]] = {
+        start_key: (None, -INF)
+    }
+    best: dict[tuple[int, int, int, int], float] = {start_key: t0}
+    heap = [(t0 + weight * (h_start if h_start < INF else 0.0), -t0, 0, start_key, deadline)]
+    nearest: tuple[float, float, tuple[int, int, int, int]] | None = None
+    pushes = expansions = 0
+    while heap:
+        _, neg_t, _, key, end = heapq.heappop(heap)
+        t = -neg_t
+        if best.get(key, INF) < t:
+            continue
+        expansions += 1
+        if expansions > max_expansions:
+            break
+        u, hk, k, stage = key
+        if u == goals[stage][0]:
+            if stage == last:
+                if end == INF:
+                    return _path(parents, best, key, goals, True)
+            else:
+                t2 = t + goals[stage][1]
+                child = (u, hk, k, stage + 1)
+                if t2 < end and t2 < best.get(child, INF):
+                    best[child] = t2
+                    parents[child] = (key, -INF)  # a dwell, not a move
+                    pushes += 1
+                    h = cost_to(tables[stage + 1], u, hk)
+                    heapq.heappush(heap, (t2 + weight * h, -t2, pushes, child, end))
+        if partial and end == INF and stage == last:
+            score = cost_to(tables[last], u, hk)
+            if nearest is None or (score, t) < nearest[:2]:
+                nearest = (score, t, key)
+        table_h = tables[stage]
+        for v, seg, tau, vk in succ[u]:
+            h = table_h[states[v][vk]]
+            if h == INF and not partial:
+                continue
+            earliest = t + turn(hk, vk)
+            latest = end - tau
+            if earliest > latest:
+                continue
+            node_gaps = intervals(v)
+            for ws, we in intervals(seg):
+                if ws > latest:
+                    break
+                lo = earliest if earliest > ws else ws
+                hi = latest if latest < we - tau else we - tau
+                if lo > hi:
+                    continue
+                for idx, (vs, ve) in enumerate(node_gaps):
+                    if vs > hi:
+                        break
+                    dep = lo if lo > vs else vs
+                    arrive = dep + tau
+                    if dep > hi or arrive >= ve:
+                        continue
+                    child = (v, vk, idx, stage)
+                    if arrive < best.get(child, INF):
+                        best[child] = arrive
+                        parents[child] = (key, dep)
+                        pushes += 1
+                        f = arrive + weight * (h if h < INF else 0.0)
+                        heapq.heappush(heap, (f, -arrive, pushes, child, ve))
+    if partial and nearest is not None and nearest[2] != start_key:
+        return _path(parents, best, nearest[2], goals, False)
+    return None
+
+
+def _path(
+    parents: dict[tuple[int, int, int, int], tuple[tuple[int, int, int, int] | None, float]],
+    best: dict[tuple[int, int, int, int], float],
+    key: tuple[int, int, int, int],
+    goals: Sequence[tuple[int, float]],
+    complete: bool,
+) -> Path:
+    chain: list[tuple[tuple[int, int, int, int], float, float]] = []
+    current: tuple[int, int, int, int] | None = key
+    while current is not None:
+        parent, dep = parents[current]
+        chain.append((current, best[current], dep))
+        current = parent
+    chain.reverse()
+    nodes: list[int] = []
+    arrive: list[float] = []
+    depart: list[float] = []
+    headings: list[int] = []
+    stops: list[int] = []
+    for (u, hk, _, _), t, dep in chain:
+        if nodes and dep == -INF:
+            stops.append(len(nodes) - 1)  # dwell at a goal on the way
+            continue
+        if nodes:
+            depart.append(dep)
+        nodes.append(u)
+        arrive.append(t)
+        headings.append(hk)
+    depart.append(INF)
+    if complete:
+        stops.append(len(nodes) - 1)
+    return Path(nodes, arrive, depart, headings, stops, complete)
