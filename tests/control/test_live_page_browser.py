@@ -10,9 +10,7 @@ where it fails instead.
 import math
 import os
 import re
-import shutil
-import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -28,16 +26,8 @@ from maps.demo import warehouse_layout
 from maps.models import Station
 from maps.services import create_layout
 from orders.models import TransportOrder
+from tests.browser import CHROMIUM, CHROMIUM_ARGS, in_thread, skip_or_fail
 
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--no-first-run",
-    "--disable-sync",
-]
 SCREENSHOT = Path("/tmp/live_page.png")
 USERNAME, PASSWORD = "operator", "live-page-test-password"
 TIMEOUT_MS = 15_000
@@ -59,36 +49,6 @@ def _missing_requirement() -> str | None:
     ):
         return "the test database is in-memory SQLite, which a server process cannot share"
     return None
-
-
-def _skip_or_fail(reason: str) -> None:
-    if os.environ.get("FLEET_REQUIRE_SERVICES") == "1":
-        pytest.fail(f"FLEET_REQUIRE_SERVICES=1 but {reason}")
-    pytest.skip(reason)
-
-
-def _in_thread(function: Callable[[], Any]) -> Any:
-    """Run `function` in a fresh thread and return its result.
-
-    Playwright's sync API keeps an asyncio loop running in this thread, where Django's ORM and
-    `async_to_sync` (used by `broadcast`) refuse to run.
-    """
-    outcome: dict[str, Any] = {}
-
-    def target() -> None:
-        try:
-            outcome["value"] = function()
-        except BaseException as error:  # re-raised in the caller
-            outcome["error"] = error
-        finally:
-            connections.close_all()
-
-    thread = threading.Thread(target=target)
-    thread.start()
-    thread.join(timeout=30)
-    if "error" in outcome:
-        raise outcome["error"]
-    return outcome.get("value")
 
 
 def _vehicle_row(**fields: Any) -> dict[str, Any]:
@@ -117,7 +77,7 @@ def _vehicle_row(**fields: Any) -> dict[str, Any]:
 
 
 def _send_vehicles(*rows: dict[str, Any]) -> None:
-    _in_thread(lambda: broadcast(LIVE_GROUP, "vehicles.update", {"vehicles": list(rows)}))
+    in_thread(lambda: broadcast(LIVE_GROUP, "vehicles.update", {"vehicles": list(rows)}))
 
 
 def _translate(transform: str | None) -> tuple[float, float]:
@@ -134,7 +94,7 @@ class LivePageBrowserTest(ChannelsLiveServerTestCase):
     def setUpClass(cls) -> None:
         reason = _missing_requirement()
         if reason:
-            _skip_or_fail(reason)
+            skip_or_fail(reason)
         cls._pin_test_database_names()
         super().setUpClass()
 
@@ -288,7 +248,7 @@ class LivePageBrowserTest(ChannelsLiveServerTestCase):
             assert page.locator("#vehicles-count").inner_text() == "2"
 
             # orders.changed makes the page fetch the orders again.
-            second_order = _in_thread(
+            second_order = in_thread(
                 lambda: (
                     TransportOrder.objects.create(
                         source=pick,
@@ -298,7 +258,7 @@ class LivePageBrowserTest(ChannelsLiveServerTestCase):
                     ).pk
                 )
             )
-            _in_thread(lambda: broadcast(LIVE_GROUP, "orders.changed", {"order": second_order}))
+            in_thread(lambda: broadcast(LIVE_GROUP, "orders.changed", {"order": second_order}))
             page.wait_for_selector(f'#orders-table tbody tr[data-id="{second_order}"]')
 
             page.screenshot(path=str(SCREENSHOT), full_page=True)

@@ -3,7 +3,6 @@
 import json
 import os
 import uuid
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -79,12 +78,3 @@ def start_fleet(
             log_dir,
         ),
     ]
-
-
-@pytest.fixture
-def stop_all() -> Iterator[list[Process]]:
-    """Processes appended here are stopped (SIGTERM) after the test, whatever happened."""
-    processes: list[Process] = []
-    yield processes
-    for process in processes:
-        process.terminate()

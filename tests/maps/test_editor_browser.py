@@ -8,10 +8,8 @@ acceptance part, the tests are skipped, unless FLEET_REQUIRE_SERVICES=1 (CI), wh
 """
 
 import os
-import shutil
-import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -27,18 +25,10 @@ from maps.services import create_layout, mark_layout_changed
 from orders.models import TransportOrder
 from orders.services import create_transport_order
 from robots.models import Vehicle
+from tests.browser import CHROMIUM, CHROMIUM_ARGS, in_thread, skip_or_fail
 from tests.e2e.conftest import REAL, start_fleet
 from tests.e2e.processes import Process, wait_until
 
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--no-first-run",
-    "--disable-sync",
-]
 SCREENSHOT = Path("/tmp/editor.png")
 BIG_SCREENSHOT = Path("/tmp/editor-5000.png")
 PROBLEM_SCREENSHOT = Path("/tmp/editor-problem.png")
@@ -54,21 +44,15 @@ SLOW_ZONE = [(6.5, -1), (9.5, -1), (9.5, 5), (6.5, 5)]
 pytestmark = [pytest.mark.browser, pytest.mark.django_db(transaction=True)]
 
 
-def _skip_or_fail(reason: str) -> None:
-    if os.environ.get("FLEET_REQUIRE_SERVICES") == "1":
-        pytest.fail(f"FLEET_REQUIRE_SERVICES=1 but {reason}")
-    pytest.skip(reason)
-
-
 @pytest.fixture
 def chromium() -> str:
     """The system Chromium, or skip (fail under FLEET_REQUIRE_SERVICES=1)."""
     if not os.path.exists(CHROMIUM):
-        _skip_or_fail(f"Chromium not found at {CHROMIUM} (apt-get install chromium)")
+        skip_or_fail(f"Chromium not found at {CHROMIUM} (apt-get install chromium)")
     try:
         import playwright.sync_api  # noqa: F401
     except ImportError:
-        _skip_or_fail("playwright is not installed")
+        skip_or_fail("playwright is not installed")
     return CHROMIUM
 
 
@@ -228,7 +212,7 @@ def drive_one_order(
 def fleet_environment() -> dict[str, str]:
     """The processes' environment, as tests/e2e's `fleet_env` builds it (skip without services)."""
     if any(not url.startswith(("postgres", "redis", "mqtt")) for url in REAL.values()):
-        _skip_or_fail(f"the acceptance part needs PostgreSQL, Redis and Mosquitto; have {REAL}")
+        skip_or_fail(f"the acceptance part needs PostgreSQL, Redis and Mosquitto; have {REAL}")
     db = connections["default"].settings_dict
     env = {key: value for key, value in os.environ.items() if not key.startswith("PYTEST")}
     env.update(
@@ -243,34 +227,6 @@ def fleet_environment() -> dict[str, str]:
         }
     )
     return env
-
-
-@pytest.fixture
-def stop_all() -> Iterator[list[Process]]:
-    processes: list[Process] = []
-    yield processes
-    for process in processes:
-        process.terminate()
-
-
-def in_thread(function: Callable[[], Any]) -> Any:
-    """Run `function` (ORM work) in a fresh thread: this one has Playwright's event loop."""
-    outcome: dict[str, Any] = {}
-
-    def target() -> None:
-        try:
-            outcome["value"] = function()
-        except BaseException as error:  # re-raised in the caller
-            outcome["error"] = error
-        finally:
-            connections.close_all()
-
-    thread = threading.Thread(target=target)
-    thread.start()
-    thread.join(timeout=30)
-    if "error" in outcome:
-        raise outcome["error"]
-    return outcome.get("value")
 
 
 def test_editing_shows_problems_and_conflicts_and_saves_moves(
