@@ -96,3 +96,28 @@ class Vehicle(models.Model):
             and not self.paused
             and bool(self.last_node_id)
         )
+
+
+class MqttCredential(models.Model):
+    """A vehicle's own login at the MQTT broker.
+
+    Only the hash in Mosquitto's password-file format is stored; the password is shown once when
+    issued. The generated ACL confines the login to the vehicle's own topics
+    (`manage.py mosquitto_config`).
+    """
+
+    vehicle = models.OneToOneField(
+        Vehicle, on_delete=models.CASCADE, related_name="mqtt_credential"
+    )
+    username = models.CharField(max_length=100, unique=True)
+    password_hash = models.CharField(max_length=200)
+    enabled = models.BooleanField(
+        default=True, help_text="disabled logins are left out of the broker's files"
+    )
+    issued_at = models.DateTimeField()
+
+    class Meta:
+        ordering = ["username"]
+
+    def __str__(self) -> str:
+        return self.username

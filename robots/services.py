@@ -1,11 +1,17 @@
 """Writes of the vehicle registry. The live snapshot is written in batches by `control`."""
 
+import re
+import secrets
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from django.db import transaction
+from django.utils import timezone
 
-from robots.models import Vehicle
+from robots import mosquitto
+from robots.models import MqttCredential, Vehicle
 
 SNAPSHOT_FIELDS = [
     "connection",
@@ -67,3 +73,90 @@ def save_factsheets(*, factsheets: dict[int, dict[str, Any]]) -> None:
     """Store the latest factsheet of each vehicle (they change rarely, so one update each)."""
     for pk, factsheet in factsheets.items():
         Vehicle.objects.filter(pk=pk).update(factsheet=factsheet)
+
+
+def default_mqtt_username(vehicle: Vehicle) -> str:
+    """`manufacturer_serial`, reduced to characters every broker accepts in a user name."""
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", f"{vehicle.manufacturer}_{vehicle.serial_number}")
+
+
+@transaction.atomic
+def issue_mqtt_password(*, vehicle: Vehicle, username: str = "") -> tuple[str, str]:
+    """Give the vehicle a new random broker password; return (user name, password).
+
+    The password is returned once and only its hash is kept, so issuing again rotates it. The
+    broker learns it when `write_broker_files` runs again.
+    """
+    name = mosquitto.check_login_name(username or default_mqtt_username(vehicle))
+    if MqttCredential.objects.filter(username=name).exclude(vehicle=vehicle).exists():
+        raise ValueError(f"MQTT user name {name!r} already belongs to another vehicle")
+    password = secrets.token_urlsafe(24)
+    MqttCredential.objects.update_or_create(
+        vehicle=vehicle,
+        defaults={
+            "username": name,
+            "password_hash": mosquitto.hash_password(password),
+            "enabled": True,
+            "issued_at": timezone.now(),
+        },
+    )
+    return name, password
+
+
+@dataclass(frozen=True)
+class BrokerFiles:
+    """The three files `write_broker_files` wrote and how many vehicle logins they hold."""
+
+    config: Path
+    passwords: Path
+    acl: Path
+    vehicles: int
+
+
+def write_broker_files(
+    *,
+    directory: Path,
+    master_username: str,
+    master_password: str,
+    listeners: mosquitto.Listeners,
+) -> BrokerFiles:
+    """Write mosquitto.conf, the password file and the ACL file for every enabled vehicle login.
+
+    Vehicles without a login are left out: they cannot connect until one is issued.
+    """
+    logins = [
+        mosquitto.VehicleLogin(
+            username=credential.username,
+            password_hash=credential.password_hash,
+            interface=credential.vehicle.interface_name,
+            protocol_version=credential.vehicle.protocol_version,
+            manufacturer=credential.vehicle.manufacturer,
+            serial_number=credential.vehicle.serial_number,
+        )
+        for credential in MqttCredential.objects.filter(enabled=True).select_related("vehicle")
+    ]
+    interfaces = {login.interface for login in logins} or {"uagv"}
+    interfaces |= set(Vehicle.objects.values_list("interface_name", flat=True))
+    master = mosquitto.MasterLogin(
+        username=master_username,
+        password_hash=mosquitto.hash_password(master_password),
+        interfaces=tuple(sorted(interfaces)),
+    )
+    directory.mkdir(parents=True, exist_ok=True)
+    files = BrokerFiles(
+        config=directory / "mosquitto.conf",
+        passwords=directory / "passwd",
+        acl=directory / "acl",
+        vehicles=len(logins),
+    )
+    files.passwords.write_text(mosquitto.render_passwords(master, logins))
+    files.passwords.chmod(0o600)
+    files.acl.write_text(mosquitto.render_acl(master, logins))
+    files.config.write_text(
+        mosquitto.render_config(
+            listeners,
+            password_file=str(files.passwords.resolve()),
+            acl_file=str(files.acl.resolve()),
+        )
+    )
+    return files
