@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint format venv browser clean bench-ingest bench-dispatch bench-routing bench-traffic
+.PHONY: demo test lint format venv browser clean bench-ingest bench-dispatch bench-routing bench-energy bench-reports bench-traffic bench-traffic-control
 
 $(STAMP): requirements.txt requirements-dev.txt
 	@command -v $(PYTHON) >/dev/null || { echo "Python 3.11 is required ($(PYTHON) not found)"; exit 1; }
@@ -44,6 +44,15 @@ bench-routing: $(STAMP)  ## LIF import of a 5,000-node site and route times (ben
 
 bench-dispatch: $(STAMP)  ## one dispatch cycle, batch assignment vs greedy (bench/results/dispatch.json)
 	$(PY) -m bench.dispatch $(BENCH_ARGS)
+
+bench-energy: $(STAMP)  ## 10 vehicles, 2 shared chargers, 8 simulated hours (bench/results/energy.json)
+	$(PY) -m bench.energy $(BENCH_ARGS)
+
+bench-reports: $(STAMP)  ## report pages over 30 days of 100 vehicles (bench/results/reports.json)
+	$(PY) -m bench.reports $(BENCH_ARGS)
+
+bench-traffic-control: $(STAMP)  ## release decisions inside control, simulated vehicles (bench/results/traffic_control.json)
+	DJANGO_SETTINGS_MODULE=fleet.settings $(PY) -m bench.traffic_control $(BENCH_ARGS)
 
 bench-traffic: $(STAMP)  ## SIPP + ADG traffic in simulation, S1-S3 (bench/results/traffic_s*.json)
 	$(PY) -m bench.traffic $(BENCH_ARGS)

@@ -4,8 +4,11 @@ Builds a warehouse grid in memory (`maps.demo.warehouse_layout`, edge lengths fr
 coordinates), puts idle vehicles on random aisle nodes and pending orders on random pick
 stations, then times `orders.assignment.plan_batch` (scipy's linear_sum_assignment) and
 `plan_greedy` (the loop it replaced) on the same input and compares the empty travel to the
-pickups. Two scenarios: all orders of one priority (pure travel), and a realistic mix of
-priorities and deadlines (where the batch also weighs urgency).
+pickups. Three scenarios: all orders of one priority (pure travel), a realistic mix of
+priorities and deadlines (where the batch also weighs urgency), both priced by distance; and
+`typed`, priced as dispatch does now: travel time per vehicle type (two types of different
+speed and turning rate, slow cross aisles), with a quarter of the orders restricted to one
+type, so empty travel is in seconds.
 
 With `--db`, it also times whole dispatch cycles through the ORM (`dispatch_pending_orders`:
 reading the orders and vehicles, planning, 200 guarded assignments with their timeline entries)
@@ -24,20 +27,61 @@ from unittest import mock
 from bench import results
 from maps.demo import warehouse_layout
 from orders.assignment import Candidate, Job, Plan, plan_batch, plan_greedy
-from traffic import RoutingGraph
+from traffic import GraphNode, RoutingGraph, VehicleProfile
 from traffic.routing import GraphEdge
 
 NOW = datetime(2026, 11, 23, 8, 0, tzinfo=UTC)
 
 
-def build_graph(spec: dict[str, Any]) -> RoutingGraph:
-    """The layout's routing graph with straight-line edge lengths (as `create_layout` stores)."""
+# The two vehicle types of the `typed` scenario: a quick tugger that turns slowly, a slower
+# carrier that turns on the spot quickly.
+TYPES = {
+    "tugger": VehicleProfile(vehicle_type="tugger", max_speed=1.6, rotation_speed=0.4),
+    "carrier": VehicleProfile(vehicle_type="carrier", max_speed=1.0, rotation_speed=1.2),
+}
+CROSS_AISLE_SPEED = 0.5  # m/s on every fifth row's edges (a busy cross aisle)
+
+
+def build_graph(spec: dict[str, Any], *, speed_limits: bool = False) -> RoutingGraph:
+    """The layout's routing graph with straight-line edge lengths (as `create_layout` stores);
+    with `speed_limits`, the edges along every fifth row are slow."""
     place = {n["id"]: (n["x"], n["y"]) for n in spec["nodes"]}
-    edges = [
-        GraphEdge(e["id"], e["start"], e["end"], math.dist(place[e["start"]], place[e["end"]]))
-        for e in spec["edges"]
+    nodes = [GraphNode(n["id"], n["x"], n["y"]) for n in spec["nodes"]]
+    edges = []
+    for e in spec["edges"]:
+        (x0, y0), (x1, y1) = place[e["start"]], place[e["end"]]
+        slow = speed_limits and y0 == y1 and round(y0 / 3) % 5 == 0
+        edges.append(
+            GraphEdge(
+                e["id"],
+                e["start"],
+                e["end"],
+                math.dist((x0, y0), (x1, y1)),
+                max_speed=CROSS_AISLE_SPEED if slow else None,
+            )
+        )
+    return RoutingGraph(nodes, edges)
+
+
+def typed_scenario(
+    spec: dict[str, Any], vehicles: int, orders: int, seed: int
+) -> tuple[list[Job], list[Candidate]]:
+    """The mixed scenario with vehicle types: every other vehicle a tugger, a quarter of the
+    orders for tuggers only."""
+    jobs, candidates = scenario(spec, vehicles, orders, mixed=True, seed=seed)
+    typed = [
+        Candidate(c.key, c.node, c.idle_since, TYPES["tugger" if i % 2 else "carrier"])
+        for i, c in enumerate(candidates)
     ]
-    return RoutingGraph(place, edges)
+    tuggers = frozenset(c.key for c in typed if c.profile == TYPES["tugger"])
+    rng = random.Random(seed + 1)
+    jobs = [
+        Job(j.key, j.pickup, j.station, j.priority, j.deadline, j.created, tuggers)
+        if rng.random() < 0.25
+        else j
+        for j in jobs
+    ]
+    return jobs, typed
 
 
 def scenario(
@@ -87,22 +131,36 @@ def timed(run: Any, repeats: int) -> tuple[Plan, float]:
 
 
 def compare(
-    graph: RoutingGraph, jobs: list[Job], candidates: list[Candidate], repeats: int
+    graph: RoutingGraph,
+    jobs: list[Job],
+    candidates: list[Candidate],
+    repeats: int,
+    *,
+    travel_time: bool = False,
 ) -> dict[str, float]:
+    """Both planners on the same input; costs are metres, or seconds with `travel_time`."""
+    if travel_time:
+        costs_to: Any = graph.travel_times_to
+        by_profile: Any = lambda goal, profile: graph.travel_times_to(goal, vehicle=profile)  # noqa: E731
+        unit = "s"
+    else:
+        costs_to, by_profile, unit = graph.distances_to, None, "m"
     batch, batch_ms = timed(
-        lambda: plan_batch(jobs, candidates, graph.distances_to, now=NOW), repeats
+        lambda: plan_batch(jobs, candidates, costs_to, now=NOW, by_profile=by_profile), repeats
     )
-    greedy, greedy_ms = timed(lambda: plan_greedy(jobs, candidates, graph.distances_to), repeats)
+    greedy, greedy_ms = timed(
+        lambda: plan_greedy(jobs, candidates, costs_to, by_profile=by_profile), repeats
+    )
     assert len(batch.pairs) == len(greedy.pairs), "both planners serve the same number of orders"
     return {
         "assigned": len(batch.pairs),
         "batch_cycle_ms": round(batch_ms, 2),
         "greedy_cycle_ms": round(greedy_ms, 2),
-        "batch_empty_travel_m": round(batch.empty_travel, 1),
-        "greedy_empty_travel_m": round(greedy.empty_travel, 1),
+        f"batch_empty_travel_{unit}": round(batch.empty_travel, 1),
+        f"greedy_empty_travel_{unit}": round(greedy.empty_travel, 1),
         "empty_travel_ratio": round(batch.empty_travel / greedy.empty_travel, 4),
-        "batch_mean_to_pickup_m": round(batch.empty_travel / len(batch.pairs), 2),
-        "greedy_mean_to_pickup_m": round(greedy.empty_travel / len(greedy.pairs), 2),
+        f"batch_mean_to_pickup_{unit}": round(batch.empty_travel / len(batch.pairs), 2),
+        f"greedy_mean_to_pickup_{unit}": round(greedy.empty_travel / len(greedy.pairs), 2),
     }
 
 
@@ -162,9 +220,14 @@ def database_cycles(spec: dict[str, Any], vehicles: int, orders: int, seed: int)
 
 
 def _greedy_as_batch(
-    jobs: list[Job], candidates: list[Candidate], distances_to: Any, *, now: datetime | None = None
+    jobs: list[Job],
+    candidates: list[Candidate],
+    distances_to: Any,
+    *,
+    now: datetime | None = None,
+    by_profile: Any = None,
 ) -> Plan:
-    return plan_greedy(jobs, candidates, distances_to)
+    return plan_greedy(jobs, candidates, distances_to, by_profile=by_profile)
 
 
 def main() -> None:
@@ -197,14 +260,24 @@ def main() -> None:
         f"dispatch: {args.vehicles} idle vehicles, {args.orders} pending orders, "
         f"{args.columns}x{args.rows} grid ({figures['nodes']} nodes), median of {args.repeats}"
     )
-    for name, mixed in (("uniform", False), ("mixed", True)):
-        jobs, candidates = scenario(spec, args.vehicles, args.orders, mixed=mixed, seed=args.seed)
-        row = compare(graph, jobs, candidates, args.repeats)
+    timed_graph = build_graph(spec, speed_limits=True)
+    for name, mixed in (("uniform", False), ("mixed", True), ("typed", True)):
+        if name == "typed":
+            jobs, candidates = typed_scenario(spec, args.vehicles, args.orders, args.seed)
+            row = compare(timed_graph, jobs, candidates, args.repeats, travel_time=True)
+            unit = "s"
+        else:
+            jobs, candidates = scenario(
+                spec, args.vehicles, args.orders, mixed=mixed, seed=args.seed
+            )
+            row = compare(graph, jobs, candidates, args.repeats)
+            unit = "m"
         figures |= {f"{name}_{key}": value for key, value in row.items()}
         print(
-            f"  {name:7} priorities: batch {row['batch_cycle_ms']:8.1f} ms/cycle, "
-            f"empty travel {row['batch_empty_travel_m']:9.1f} m | greedy "
-            f"{row['greedy_cycle_ms']:8.1f} ms/cycle, {row['greedy_empty_travel_m']:9.1f} m | "
+            f"  {name:7}: batch {row['batch_cycle_ms']:8.1f} ms/cycle, "
+            f"empty travel {row[f'batch_empty_travel_{unit}']:9.1f} {unit} | greedy "
+            f"{row['greedy_cycle_ms']:8.1f} ms/cycle, "
+            f"{row[f'greedy_empty_travel_{unit}']:9.1f} {unit} | "
             f"batch/greedy travel {row['empty_travel_ratio']:.3f} ({row['assigned']} assigned)"
         )
     if args.db:

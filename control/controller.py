@@ -17,13 +17,17 @@ from typing import Any
 
 import vda5050
 from control import snapshots
+from control.action_states import ActionStatePolicy
 from control.capabilities import refuse_instant_action
+from control.conflicts import refuse_conflict
+from control.distribution import Distribution
 from control.driver import OrderDriver
 from control.execution import LayoutIndex
 from control.live import Fleet, InstantActionTrack, LiveVehicle
 from control.ports import ActiveOrder, FlushBatch, Store
-from control.publisher import Publish, Publisher
+from control.publisher import ProtocolLimitError, Publish, Publisher
 from control.session import Verdict
+from control.traffic_link import TrafficLink
 from control.versions import to_model, wire_version
 from vda5050 import DecodeError, decode
 from vda5050.enums import TopicKind
@@ -39,10 +43,7 @@ _VEHICLE_COMMANDS: dict[str, tuple[str, dict[str, Any]]] = {
 
 
 # Commands control knows but cannot carry out yet: refused with the reason, never dropped.
-_NOT_YET = {
-    "vehicle.charge": "sending a vehicle to a charger is not supported yet (issue 7)",
-    "vehicle.park": "sending a vehicle to a parking station is not supported yet (issue 7)",
-}
+_NOT_YET: dict[str, str] = {}
 
 
 class Controller:
@@ -55,6 +56,7 @@ class Controller:
         interface_name: str,
         publish: Publish | None = None,
         base_ahead: int | None = None,
+        traffic: bool = False,
     ) -> None:
         self.store = store
         self.interface_name = interface_name
@@ -64,7 +66,15 @@ class Controller:
         self.publisher = Publisher(publish, self.counters)
         self.lock = threading.RLock()
         self._unflushed_outcomes: list[InstantActionTrack] = []  # from a failed flush
-        self.driver = OrderDriver(self.publisher, lambda: self.layouts, base_ahead=base_ahead)
+        self._job_requests: list[dict[str, Any]] = []  # the flush opens charge sessions, moves
+        # Traffic management releases bases; off: a fixed `base_ahead` (single-vehicle sites).
+        self.traffic = TrafficLink(lambda: list(self.fleet.vehicles.values())) if traffic else None
+        self.driver = OrderDriver(
+            self.publisher, lambda: self.layouts, base_ahead=base_ahead, traffic=self.traffic
+        )
+        self.action_states = ActionStatePolicy(self.publisher)  # 3.0 retries, clearing (E.27-28)
+        # Map releases (K), 3.0 zone sets and zone/edge requests (L): control.distribution.
+        self.distribution = Distribution(self.publisher, self.fleet, self.request_instant_action)
 
     def load(self) -> None:
         """Rebuild from the database: layouts and known vehicles (their state comes over MQTT)."""
@@ -105,7 +115,8 @@ class Controller:
             known = self.fleet.vehicles.get((topic.manufacturer, topic.serial_number))
             version = wire_version(topic.major_version, known.version if known else None)
             try:
-                message = to_model(topic.kind, decode(topic.kind, payload, version=version))
+                raw = decode(topic.kind, payload, version=version)
+                message = to_model(topic.kind, raw)
             except DecodeError as exc:
                 self._reject("decode_errors", topic_text, exc, known)
                 return
@@ -127,6 +138,7 @@ class Controller:
                     return
             try:
                 handler(self, vehicle, message)
+                self.distribution.after_message(vehicle, topic.kind, raw)
             except Exception:  # one bad robot never stops the fleet
                 self.counters["handler_errors"] += 1
                 logger.exception("handler failed for %s", topic_text)
@@ -135,6 +147,7 @@ class Controller:
         if vehicle.apply_state(state, received_at=datetime.now(UTC)):
             self._reconcile(vehicle, reconnected=False)
         self.driver.on_state(vehicle, state)
+        self.action_states.on_state(vehicle, state)
 
     def on_connection(self, vehicle: LiveVehicle, message: vda5050.Connection) -> None:
         if vehicle.apply_connection(message, received_at=datetime.now(UTC)):
@@ -191,7 +204,7 @@ class Controller:
     def sync(self, orders: list[ActiveOrder]) -> None:
         """Start, adopt, extend, resend or cancel the assigned orders read from the database."""
         with self.lock:
-            self.driver.sync(self.fleet.by_pk, orders)
+            self.driver.sync(self.fleet.by_pk, self.distribution.ready_orders(orders))
 
     def execute(self, command: dict[str, Any]) -> None:
         """Carry out a command from web or Celery (fleet.control_queue).
@@ -201,12 +214,16 @@ class Controller:
         factsheet first and tracked to their end.
         """
         kind = command.get("kind", "")
-        if kind.startswith("order."):
-            return
+        if kind.startswith(("order.", "maps.")):
+            return  # the loop re-reads orders (and, for maps., releases) from the database
         action_type, parameters = _VEHICLE_COMMANDS.get(kind, (None, {}))
         if kind == "vehicle.instant_action":
             action_type, parameters = command.get("action_type"), command.get("parameters") or {}
         request = command.get("command", command.get("request"))
+        if kind in {"vehicle.charge", "vehicle.park"}:  # jobs the flush opens, driven like orders
+            with self.lock:
+                self._job_requests.append(command)
+            return
         with self.lock:
             vehicle = self.fleet.by_pk(command.get("vehicle", -1))
             if vehicle is not None and kind in _NOT_YET:
@@ -244,8 +261,22 @@ class Controller:
         state = vehicle.state
         mode = str(state.operating_mode) if state is not None else None
         reason = refuse_instant_action(vehicle.capabilities, mode, action_type, parameters)
+        if reason is None:  # E.23: nor may it conflict with the order or the vehicle's state
+            execution = vehicle.execution
+            reason = refuse_conflict(
+                action_type,
+                parameters,
+                state,
+                controlled_order=None if execution is None else execution.vda_order_id,
+            )
         if reason is None:
-            action_id = self.publisher.instant_action(vehicle, action_type, parameters=parameters)
+            try:
+                action_id = self.publisher.instant_action(
+                    vehicle, action_type, parameters=parameters
+                )
+            except ProtocolLimitError as exc:  # J.44
+                reason = str(exc)
+        if reason is None:
             track = InstantActionTrack(action_id, action_type, "SENT", request=request)
         else:
             self.counters["refused_actions"] += 1
@@ -263,6 +294,7 @@ class Controller:
         with self.lock:
             batch.progress, self.driver.progress = self.driver.progress, []
             batch.command_outcomes, self._unflushed_outcomes = self._unflushed_outcomes, []
+            batch.job_requests, self._job_requests = self._job_requests, []
             now = time.monotonic()
             for vehicle in self.fleet.vehicles.values():
                 link = vehicle.session.link(now)
@@ -296,6 +328,7 @@ class Controller:
             or batch.progress
             or batch.factsheets
             or batch.command_outcomes
+            or batch.job_requests
         ):
             return
         try:
@@ -315,6 +348,7 @@ class Controller:
         with self.lock:
             self.driver.progress[:0] = batch.progress
             self._unflushed_outcomes[:0] = batch.command_outcomes
+            self._job_requests[:0] = batch.job_requests
             for vehicle in self.fleet.vehicles.values():
                 if vehicle.pk is None or vehicle.pk in {s["pk"] for s in batch.snapshots}:
                     vehicle.needs_flush = True
@@ -327,8 +361,11 @@ class Controller:
             changed = [v for v in self.fleet.vehicles.values() if v.needs_broadcast]
             for vehicle in changed:
                 vehicle.needs_broadcast = False
-            return [snapshots.browser_row(v, self.layouts) for v in changed]
+            return [snapshots.browser_row(v, self.layouts, self.traffic) for v in changed]
 
     def all_browser_rows(self) -> list[dict[str, Any]]:
         with self.lock:
-            return [snapshots.browser_row(v, self.layouts) for v in self.fleet.vehicles.values()]
+            return [
+                snapshots.browser_row(v, self.layouts, self.traffic)
+                for v in self.fleet.vehicles.values()
+            ]

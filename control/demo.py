@@ -11,6 +11,7 @@ import threading
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from django.contrib.auth import get_user_model
 from django.db import close_old_connections
@@ -114,3 +115,33 @@ class OrderStream(threading.Thread):
                 destination=self.random.choice(drops),
                 load_id=f"L{self.random.randrange(10**6):06d}",
             )
+
+
+class EmbeddedBeat(threading.Thread):
+    """Celery beat for the embedded demo: runs CELERY_BEAT_SCHEDULE's tasks in this process.
+
+    Without Redis there is no broker for beat to send to, so the periodic work (dispatch cycle,
+    charging, service plans, alert escalation, report roll-ups) runs here, each task at its own
+    interval, eagerly, one after the other.
+    """
+
+    def __init__(self, schedule: dict[str, dict[str, Any]]) -> None:
+        super().__init__(name="demo-beat", daemon=True)
+        self.entries = [(entry["task"], float(entry["schedule"])) for entry in schedule.values()]
+        self.stopped = threading.Event()
+
+    def run(self) -> None:
+        from celery import current_app
+
+        due = {task: time.monotonic() + interval for task, interval in self.entries}
+        while not self.stopped.wait(1.0):
+            for task, interval in self.entries:
+                if time.monotonic() < due[task]:
+                    continue
+                due[task] = time.monotonic() + interval
+                try:
+                    current_app.tasks[task].apply()
+                except Exception:
+                    logger.exception("periodic task %s failed; it runs again next time", task)
+                finally:
+                    close_old_connections()

@@ -20,8 +20,9 @@ from control.order_messages import (
     initial_window,
 )
 from control.ports import ActiveOrder
-from control.publisher import Publisher
+from control.publisher import ProtocolLimitError, Publisher
 from control.session import Link
+from control.traffic_link import TrafficLink
 
 logger = logging.getLogger(__name__)
 
@@ -38,10 +39,14 @@ class OrderDriver:
         layouts: Callable[[], dict[str, LayoutIndex]],
         *,
         base_ahead: int | None = None,
+        traffic: TrafficLink | None = None,
     ) -> None:
         self.publisher = publisher
         self.layouts = layouts
         self.base_ahead = base_ahead
+        # With traffic management the base reaches as far as traffic released (control/
+        # traffic_link.py); without it `base_ahead` nodes ahead of the vehicle.
+        self.traffic = traffic
         self.progress: list[Progress] = []
         self._orders: dict[int, ActiveOrder] = {}
         # Orders that ended in memory; the database may list them as active until the next
@@ -52,6 +57,9 @@ class OrderDriver:
         self, vehicles: Callable[[int], LiveVehicle | None], orders: list[ActiveOrder]
     ) -> None:
         """Start, adopt, extend, resend or cancel the assigned orders read from the database."""
+        if self.traffic is not None:
+            self.traffic.ensure(self.layouts())
+            self.traffic.tick(time.monotonic())  # re-timed and re-planned bases go out below
         self._orders = {o.transport_order_id: o for o in orders}
         self._ended &= self._orders.keys()  # forget what the database closed
         for order in orders:
@@ -61,6 +69,10 @@ class OrderDriver:
 
     def on_state(self, vehicle: LiveVehicle, state: vda5050.State) -> None:
         """Follow the vehicle's progress on its order and release more of the route."""
+        if self.traffic is not None:
+            self.traffic.ensure(self.layouts())
+            for other in self.traffic.observe(vehicle, state, time.monotonic()):
+                self._extend_released(other)  # it waited for this vehicle
         execution = vehicle.execution
         if execution is None:
             return
@@ -77,6 +89,8 @@ class OrderDriver:
         if execution.phase is Phase.DONE:
             self._ended.add(execution.transport_order_id)
             vehicle.execution = None
+            if self.traffic is not None:
+                self.traffic.ended(vehicle, time.monotonic())
         elif execution.phase is Phase.RUNNING and not execution.awaiting_confirmation:
             order = self._orders.get(execution.transport_order_id)
             if order is not None:
@@ -113,6 +127,8 @@ class OrderDriver:
             vda_order_id=order.vda_order_id,
             route=order.route,
             pickup=order.pickup_node,
+            kind=order.kind,
+            steps=order.steps,
         )
         if state.order_id == order.vda_order_id:
             # Restarted mid-order: adopt, never resend. The base released before is what the
@@ -131,8 +147,11 @@ class OrderDriver:
             reason = f"vehicle is at {state.last_node_id}, route starts at {order.route[0]}"
             self._end(Progress("requeued", order.transport_order_id, {"reason": reason}))
             return None
-        window = initial_window(len(order.route), self._limits(vehicle))
-        if not self._send(vehicle, order, execution, window, update_id=0):
+        window: Window | None = initial_window(len(order.route), self._limits(vehicle))
+        if self.traffic is not None:
+            limits = self._limits(vehicle)
+            window = self.traffic.first_window(vehicle, execution, order.map_id, limits.max_nodes)
+        if window is None or not self._send(vehicle, order, execution, window, update_id=0):
             return None
         vehicle.execution = execution
         # From now on only the vehicle's state decides; the reconciler must not take it back.
@@ -144,6 +163,14 @@ class OrderDriver:
         state = vehicle.state
         if execution.fully_released or state is None or state.order_id != execution.vda_order_id:
             return
+        if self.traffic is not None and self.traffic.controls(vehicle, execution.vda_order_id):
+            limits = self._limits(vehicle)
+            traffic_window = self.traffic.next_window(vehicle, execution, limits.max_nodes)
+            if traffic_window is not None:
+                self._send(vehicle, order, execution, traffic_window, execution.update_id + 1)
+            return
+        if self.traffic is not None and self.traffic.lost(vehicle, execution.vda_order_id):
+            return  # traffic plans it again once the vehicle waits at its decision point
         passed = (state.last_node_sequence_id or 0) // 2  # our sequence ids are 2·route index
         if state.new_base_request:
             passed = max(passed, execution.released_until)  # waiting at the decision point
@@ -153,6 +180,15 @@ class OrderDriver:
         if window is not None:
             self._send(vehicle, order, execution, window, update_id=execution.update_id + 1)
 
+    def _extend_released(self, vehicle: LiveVehicle) -> None:
+        """Send the base traffic released to a vehicle, if its order can take an update now."""
+        execution = vehicle.execution
+        order = self._orders.get(execution.transport_order_id) if execution else None
+        if execution is None or order is None:
+            return
+        if execution.phase is Phase.RUNNING and not execution.awaiting_confirmation:
+            self._extend(vehicle, order, execution)
+
     def _resend(self, vehicle: LiveVehicle, order: ActiveOrder, execution: OrderExecution) -> None:
         """Send the unconfirmed message again, identical (B.14), or give up after MAX_ATTEMPTS."""
         if vehicle.connection != Link.ONLINE or execution.window is None:
@@ -160,6 +196,8 @@ class OrderDriver:
         if execution.attempts >= self.MAX_ATTEMPTS:
             execution.phase = Phase.DONE
             vehicle.execution = None
+            if self.traffic is not None:
+                self.traffic.ended(vehicle, time.monotonic())
             reason = (
                 f"vehicle did not confirm order {execution.vda_order_id} update "
                 f"{execution.update_id} after {execution.attempts} attempts"
@@ -191,16 +229,28 @@ class OrderDriver:
             job,
             max_speed=sends_max_speed(vehicle.capabilities),
         )
-        self.publisher.order(
-            vehicle,
-            order_id=execution.vda_order_id,
-            order_update_id=update_id,
-            nodes=nodes,
-            edges=edges,
-        )
+        try:
+            self.publisher.order(
+                vehicle,
+                order_id=execution.vda_order_id,
+                order_update_id=update_id,
+                nodes=nodes,
+                edges=edges,
+            )
+        except ProtocolLimitError as exc:
+            self._refuse(vehicle, execution, str(exc))
+            return False
         execution.sent(update_id, window)
         vehicle.last_order_sent = now
         return True
+
+    def _refuse(self, vehicle: LiveVehicle, execution: OrderExecution, reason: str) -> None:
+        """J.44: a message that breaks the vehicle's string limits is not sent; the order fails
+        with the reason (a running one is cancelled: the vehicle drives only its base)."""
+        detail = {"reason": f"not sent: {reason}"}
+        self._end(Progress("failed", execution.transport_order_id, detail))
+        if vehicle.execution is execution:
+            self.cancel(vehicle, execution)
 
     def _limits(self, vehicle: LiveVehicle) -> OrderLimits:
         capabilities = vehicle.capabilities

@@ -7,9 +7,13 @@ Pure logic without MQTT or the database: `build_order` turns a route into an ord
 import enum
 import time
 import uuid
+from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import vda5050
+from control.rejections import rejection_reason
 
 TERMINAL = {"FINISHED", "FAILED"}
 
@@ -59,16 +63,40 @@ class Progress:
     detail: dict[str, str] = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class StepPlan:
+    """A stop of a transport order as dispatch planned it: at route index `index`, do
+    `action_type` (pick, drop or a custom action) for `station` with `parameters`."""
+
+    index: int
+    action_type: str
+    station: str = ""
+    parameters: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class StepAction:
+    """A stop being driven: its node action's id and its current route index (traffic may
+    re-plan the route between stops; see `OrderExecution.move_stops`)."""
+
+    index: int
+    action_type: str
+    action_id: str
+    station: str = ""
+    parameters: dict[str, Any] = field(default_factory=dict)
+
+
 @dataclass
 class OrderExecution:
-    """One transport order being driven by one vehicle as VDA 5050 order `vda_order_id`."""
+    """One transport order being driven by one vehicle as VDA 5050 order `vda_order_id`.
+
+    `steps` are its stops in order, each a node action; the last is at the route's end."""
 
     transport_order_id: int
     vda_order_id: str
     route: list[str]
-    pick_index: int
-    pick_action_id: str
-    drop_action_id: str
+    steps: list[StepAction] = field(default_factory=list)
+    first_stop: int = 0  # route index of the only stop of an order without steps (charge)
     phase: Phase = Phase.SENT
     sent_monotonic: float = field(default_factory=time.monotonic)
     cancel_action_id: str | None = None
@@ -78,6 +106,8 @@ class OrderExecution:
     confirmed_update: int = -1  # latest orderUpdateId the vehicle's state showed
     attempts: int = 0  # sends of the latest message (resends are identical)
     window: Window | None = None  # what the latest message carried
+    kind: str = "transport"  # or "charge", "park" (control.ports.ActiveOrder.kind)
+    retries: dict[str, int] = field(default_factory=dict)  # 3.0 retry sent, by action id
 
     @property
     def awaiting_confirmation(self) -> bool:
@@ -95,21 +125,91 @@ class OrderExecution:
 
     @classmethod
     def plan(
-        cls, *, transport_order_id: int, vda_order_id: str, route: list[str], pickup: str
+        cls,
+        *,
+        transport_order_id: int,
+        vda_order_id: str,
+        route: list[str],
+        pickup: str | None = None,
+        kind: str = "transport",
+        steps: Sequence[StepPlan] = (),
     ) -> "OrderExecution":
+        """Without `steps`, a transport order picks at `pickup` and drops at the route's end."""
+        first = route.index(pickup) if pickup in route else 0
+        if not steps and kind == "transport":
+            steps = (StepPlan(first, "pick"), StepPlan(len(route) - 1, "drop"))
+        counts = Counter(step.action_type for step in steps)
         return cls(
             transport_order_id=transport_order_id,
             vda_order_id=vda_order_id,
             route=route,
-            pick_index=route.index(pickup),
-            # Derived from the order id, so a restarted control recognises them.
-            pick_action_id=f"{vda_order_id}-pick",
-            drop_action_id=f"{vda_order_id}-drop",
+            # Derived from the order id, so a restarted control recognises them; an action type
+            # that occurs once keeps the short form (`TO-7-pick`) that pick → drop orders had.
+            steps=[
+                StepAction(
+                    step.index,
+                    step.action_type,
+                    f"{vda_order_id}-{step.action_type}"
+                    if counts[step.action_type] == 1
+                    else f"{vda_order_id}-{number}-{step.action_type}",
+                    step.station,
+                    dict(step.parameters),
+                )
+                for number, step in enumerate(steps, start=1)
+            ],
+            first_stop=first,
+            kind=kind,
         )
 
     @property
     def action_steps(self) -> dict[str, str]:
-        return {self.pick_action_id: "pick", self.drop_action_id: "drop"}
+        if self.kind == "charge":  # a charge session: one startCharging at the charger
+            return {self.charge_action_id: "charge"}
+        if self.kind == "park":  # a drive to a station, nothing to do there
+            return {}
+        return {step.action_id: step.action_type for step in self.steps}
+
+    @property
+    def pick_index(self) -> int:
+        """Route index of the first stop (the pick of a pick → drop order)."""
+        return self.steps[0].index if self.steps else self.first_stop
+
+    @pick_index.setter
+    def pick_index(self, index: int) -> None:
+        if self.steps:
+            self.steps[0].index = index
+        else:
+            self.first_stop = index
+
+    @property
+    def pick_action_id(self) -> str:
+        return next((s.action_id for s in self.steps if s.action_type == "pick"), "")
+
+    @property
+    def drop_action_id(self) -> str:
+        return next((s.action_id for s in reversed(self.steps) if s.action_type == "drop"), "")
+
+    def stop_index(self, number: int) -> int:
+        """Route index of step `number` (0-based); the last step is always at the route's end."""
+        return len(self.route) - 1 if number == len(self.steps) - 1 else self.steps[number].index
+
+    @property
+    def stop_indices(self) -> list[int]:
+        """Route indices of all stops in order: the goals to plan the route through."""
+        if not self.steps:
+            return [self.first_stop, len(self.route) - 1]
+        return [self.stop_index(number) for number in range(len(self.steps))]
+
+    def move_stops(self, stops: Sequence[int]) -> None:
+        """The route was re-planned: stop i is now at route index `stops[i]`."""
+        if not self.steps:
+            self.first_stop = stops[0] if stops else self.first_stop
+        for step, index in zip(self.steps, stops, strict=False):
+            step.index = index
+
+    @property
+    def charge_action_id(self) -> str:
+        return f"{self.vda_order_id}-charge"
 
     def observe(self, state: vda5050.State) -> list[Progress]:
         """Progress events that `state` reveals (acceptance, actions done, completion, failure)."""
@@ -134,17 +234,12 @@ class OrderExecution:
             status = statuses.get(action_id)
             if status == "FAILED":
                 self.phase = Phase.DONE
-                return [
-                    *events,
-                    Progress(
-                        "failed", self.transport_order_id, {"reason": f"{step} action failed"}
-                    ),
-                ]
-            if status == "FINISHED" and step not in self.steps_done:
-                self.steps_done.add(step)
-                node = self.route[self.pick_index if step == "pick" else -1]
+                reason = _action_failure(step, self.retries.get(action_id, 0), state, action_id)
+                return [*events, Progress("failed", self.transport_order_id, {"reason": reason})]
+            if status == "FINISHED" and action_id not in self.steps_done:
+                self.steps_done.add(action_id)
                 events.append(
-                    Progress("step", self.transport_order_id, {"step": step, "node": node})
+                    Progress("step", self.transport_order_id, self._step_detail(action_id, step))
                 )
         if self._is_complete(state, statuses):
             self.phase = Phase.DONE
@@ -163,15 +258,25 @@ class OrderExecution:
     def left_automatic(self, state: vda5050.State) -> Progress | None:
         """MANUAL, SERVICE and TEACHIN clear the vehicle's order (REFERENCE I.40, G.37)."""
         mode = str(state.operating_mode)
-        if mode in {"AUTOMATIC", "SEMIAUTOMATIC"} or self.phase is Phase.DONE:
+        # 3.0 INTERVENED keeps the order (REFERENCE I.41); STARTUP clears it (G.37).
+        if mode in {"AUTOMATIC", "SEMIAUTOMATIC", "INTERVENED"} or self.phase is Phase.DONE:
             return None
         self.phase = Phase.DONE
         reason = f"vehicle switched to {mode} mode, which clears its order"
         return Progress("failed", self.transport_order_id, {"reason": reason})
 
+    def _step_detail(self, action_id: str, step: str) -> dict[str, str]:
+        """What a finished step action reports: its type, node and (0-based) step number."""
+        for number, planned in enumerate(self.steps):
+            if planned.action_id == action_id:
+                node = self.route[self.stop_index(number)]
+                return {"step": step, "node": node, "index": str(number)}
+        return {"step": step, "node": self.route[-1]}
+
     def start_cancel(self) -> str:
         self.phase = Phase.CANCELLING
-        self.cancel_action_id = f"cancel-{uuid.uuid4()}"
+        # Short (23 characters) so it fits small factsheet idLen limits (J.44).
+        self.cancel_action_id = f"cancel-{uuid.uuid4().hex[:16]}"
         return self.cancel_action_id
 
     def _is_complete(self, state: vda5050.State, statuses: dict[str, str]) -> bool:
@@ -202,6 +307,13 @@ class OrderExecution:
         for error in state.errors:
             refs = {(r.reference_key, r.reference_value) for r in error.error_references or []}
             if ("orderId", self.vda_order_id) in refs:
-                text = f"{error.error_type} {error.error_description or ''}".strip()
-                return f"rejected by vehicle: {text}"
+                return rejection_reason(error)  # 3.0 types explained (C.18)
         return None
+
+
+def _action_failure(step: str, retries: int, state: vda5050.State, action_id: str) -> str:
+    """`pick action failed after 2 retries: <the vehicle's result>`."""
+    reason = f"{step} action failed" + (f" after {retries} retries" if retries else "")
+    results = {a.action_id: a.result_description for a in state.action_states}
+    result = results.get(action_id)
+    return f"{reason}: {result}" if result else reason

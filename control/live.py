@@ -12,7 +12,7 @@ from typing import Any
 import msgspec
 
 import vda5050
-from control.capabilities import Capabilities
+from control.capabilities import ORDER_MODES, Capabilities
 from control.execution import OrderExecution
 from control.session import Link, ProtocolSession
 
@@ -56,6 +56,12 @@ class LiveVehicle:
     last_seen: datetime | None = None
     execution: OrderExecution | None = None
     last_order_sent: float = float("-inf")  # monotonic; for the factsheet's minOrderInterval
+    # 3.0 action-state bookkeeping (control.action_states): the instant actions we sent (to
+    # tell them from order actions in the merged actionStates), RETRIABLE actions a retry or
+    # skipRetry was sent for, and when clearInstantActions last went out (monotonic).
+    sent_instant: dict[str, None] = field(default_factory=dict)
+    answered_retriable: dict[str, float] = field(default_factory=dict)  # id -> monotonic
+    cleared_at: float = float("-inf")
     needs_flush: bool = True
     needs_broadcast: bool = True
     was_available: bool = False
@@ -127,16 +133,19 @@ class LiveVehicle:
 
     @property
     def is_available(self) -> bool:
-        """Connected, in an automatic mode, localised on a node and without fatal errors."""
+        """Connected, in a mode that takes orders, localised on a node, without fatal errors."""
         state = self.state
         return (
             self.connection == Link.ONLINE
             and state is not None
-            and str(state.operating_mode) in {"AUTOMATIC", "SEMIAUTOMATIC"}
+            and str(state.operating_mode) in ORDER_MODES  # incl. 3.0 INTERVENED (I.41)
             and not state.paused
             and bool(state.last_node_id)
             # F.33: an unlocalised vehicle cannot be routed (no position = line-guided, fine)
             and (state.agv_position is None or state.agv_position.position_initialized)
+            # F.34: a vehicle reports charging false only once it can take orders again (after
+            # stopCharging); until then a new order waits (3.0 powerSupply.charging, adapted)
+            and not state.battery_state.charging
             and not any(str(e.error_level) == "FATAL" for e in state.errors)
         )
 

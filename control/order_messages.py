@@ -8,9 +8,10 @@ nodes one message may carry; `base_ahead` limits how far ahead of the vehicle th
 """
 
 from dataclasses import dataclass
+from typing import Any
 
 import vda5050
-from control.execution import LayoutIndex, OrderExecution, Window
+from control.execution import LayoutIndex, OrderExecution, StepAction, Window
 from vda5050.enums import BlockingType
 
 
@@ -64,8 +65,9 @@ def build_order(
     """The nodes and edges of route indices window.first..window.last.
 
     Node i has sequence id 2·i, the edge into it 2·i−1, so an update's stitching node repeats
-    exactly what was sent before (same id, sequence id and actions). Pick and drop are HARD
-    blocking node actions so the vehicle stands still while handling the load. With `max_speed`
+    exactly what was sent before (same id, sequence id and actions). Each step of the order is a
+    HARD blocking node action at its stop (pick, drop or a custom action), so the vehicle stands
+    still while handling the load. With `max_speed`
     each edge carries its speed limit after zones, where it has one.
     """
     route = execution.route
@@ -102,25 +104,46 @@ def build_order(
 
 
 def _node_actions(execution: OrderExecution, index: int, job: LoadJob) -> list[vda5050.Action]:
-    actions = []
-    if index == execution.pick_index:
-        actions.append(_load_action("pick", execution.pick_action_id, job, job.pick_station))
-    if index == len(execution.route) - 1:
-        actions.append(_load_action("drop", execution.drop_action_id, job, job.drop_station))
-    return actions
-
-
-def _load_action(action_type: str, action_id: str, job: LoadJob, station: str) -> vda5050.Action:
-    parameters = [
-        vda5050.ActionParameter(key="stationType", value="floor"),
-        vda5050.ActionParameter(key="stationName", value=station),
-        vda5050.ActionParameter(key="loadType", value=job.load_type or "EPAL"),
+    if execution.kind == "park":
+        return []
+    if execution.kind == "charge":  # battery charge session: startCharging at the point
+        if index != len(execution.route) - 1:
+            return []
+        action_id = execution.charge_action_id
+        return [
+            vda5050.Action(
+                action_type="startCharging",
+                action_id=action_id,
+                blocking_type=BlockingType.HARD,
+                action_parameters=[],
+            )
+        ]
+    # Every stop at this route index, in step order (two steps may share a node).
+    return [
+        _step_action(step, job)
+        for number, step in enumerate(execution.steps)
+        if execution.stop_index(number) == index
     ]
-    if job.load_id:
-        parameters.append(vda5050.ActionParameter(key="loadId", value=job.load_id))
+
+
+def _step_action(step: StepAction, job: LoadJob) -> vda5050.Action:
+    """A stop's node action. Pick and drop carry the station and the load; a custom action
+    carries exactly the step's parameters. All are HARD: the vehicle stands while acting."""
+    if step.action_type in ("pick", "drop"):
+        default = job.pick_station if step.action_type == "pick" else job.drop_station
+        values: dict[str, Any] = {
+            "stationType": "floor",
+            "stationName": step.station or default,
+            "loadType": job.load_type or "EPAL",
+        }
+        if job.load_id:
+            values["loadId"] = job.load_id
+        values.update(step.parameters)
+    else:
+        values = dict(step.parameters)
     return vda5050.Action(
-        action_type=action_type,
-        action_id=action_id,
+        action_type=step.action_type,
+        action_id=step.action_id,
         blocking_type=BlockingType.HARD,
-        action_parameters=parameters,
+        action_parameters=[vda5050.ActionParameter(key=k, value=v) for k, v in values.items()],
     )

@@ -5,12 +5,19 @@ from typing import Any
 
 from django.db import close_old_connections, transaction
 
-from control.execution import LayoutIndex, NodePlace, Progress
+from battery import selectors as battery_selectors
+from battery import services as battery_services
+from control.execution import LayoutIndex, NodePlace, Progress, StepPlan
 from control.ports import ActiveOrder, FlushBatch
+from fleet.exceptions import DomainError
+from maintenance import selectors as maintenance_selectors
+from maintenance import services as maintenance_services
 from maps.models import Edge, Map, Node
 from maps.selectors import edge_speed_limits
 from orders import selectors as order_selectors
 from orders import services as order_services
+from orders.models import TransportOrder
+from orders.services import floor as order_floor
 from orders.tasks import dispatch_pending_orders_task
 from robots import services as robot_services
 from robots.models import Vehicle
@@ -65,10 +72,11 @@ class DjangoStore:
                 load_id=order.load_id,
                 load_type=order.load_type,
                 cancel_requested=order.cancel_requested,
+                steps=_steps(order),
             )
             for order in order_selectors.list_active_orders()
             if order.vehicle_id is not None and order.route
-        ]
+        ] + _jobs()
 
     def flush(self, batch: FlushBatch) -> dict[tuple[str, str], int]:
         """Register new vehicles, bulk-update snapshots, then apply order progress in order."""
@@ -77,10 +85,20 @@ class DjangoStore:
             identities=[v.key for v in batch.new_vehicles]
         )
         with transaction.atomic():
+            # Vehicle webhooks compare with the rows before they change (never raises).
+            order_services.emit_vehicle_changes(snapshots=batch.snapshots)
             robot_services.save_snapshots(snapshots=batch.snapshots)
             robot_services.save_factsheets(factsheets=batch.factsheets)
         for progress in batch.progress:
             _apply(progress)
+        # Alerts and inventory watch the saved snapshots after the progress (so a finished pick
+        # is in the stock before state.loads is compared); cheap, and never raises (issue 8).
+        order_floor.observe_fleet(snapshots=batch.snapshots)
+        # Battery history and maintenance counters (issue 7): sampled, never raise.
+        battery_services.observe_snapshots(snapshots=batch.snapshots)
+        maintenance_services.observe_snapshots(snapshots=batch.snapshots)
+        for command in batch.job_requests:
+            _open_job(command)
         for outcome in batch.command_outcomes:
             if outcome.request is not None and outcome.request.isdigit():
                 order_services.record_command_outcome(
@@ -110,15 +128,98 @@ class DjangoStore:
             logger.exception("could not queue dispatch; beat runs it periodically")
 
 
+def _steps(order: TransportOrder) -> tuple[StepPlan, ...]:
+    """The order's stops at the route indices dispatch recorded; none for an order assigned
+    before steps existed (control then picks at the source and drops at the end)."""
+    steps = list(order.steps.all())
+    indices = list(order.route_steps or [])
+    if not steps or len(indices) != len(steps):
+        return ()
+    return tuple(
+        StepPlan(index, step.vda_action_type, step.station.station_id, dict(step.parameters))
+        for step, index in zip(steps, indices, strict=True)
+    )
+
+
+# Jobs the system creates besides transport orders travel as orders with negative ids:
+# -(2·pk) for a battery charge session, -(2·pk + 1) for a maintenance move to a station.
+JOB_SOURCES = {0: "charge", 1: "park"}
+
+
+def job_order_id(kind: str, pk: int) -> int:
+    return -(2 * pk + (1 if kind == "park" else 0))
+
+
+def _jobs() -> list[ActiveOrder]:
+    """Charge sessions driving to their point and moves to a park station, as orders."""
+    jobs = [("charge", job["session"], job) for job in battery_selectors.list_charge_jobs()]
+    jobs += [("park", job["move"], job) for job in maintenance_selectors.list_move_jobs()]
+    return [
+        ActiveOrder(
+            transport_order_id=job_order_id(kind, int(pk)),
+            vda_order_id=str(job["vda_order_id"]),
+            vehicle_pk=int(job["vehicle"]),
+            route=list(job["route"]),
+            pickup_node=str(job["route"][-1]),
+            map_id=str(job["map_id"]),
+            pick_station=str(job["station"]),
+            drop_station=str(job["station"]),
+            kind=kind,
+        )
+        for kind, pk, job in jobs
+    ]
+
+
+def _open_job(command: dict[str, Any]) -> None:
+    """A staff `vehicle.charge` command becomes a queued charge session, `vehicle.park` a move
+    to a park station; or the command is refused with the reason."""
+    request = command.get("command")
+    station = str(command.get("station") or "")
+    try:
+        if command.get("kind") == "vehicle.park":
+            vehicle = Vehicle.objects.get(pk=int(command.get("vehicle", -1)))
+            move = maintenance_services.send_to_station(
+                vehicle=vehicle,
+                station_id=station,
+                reason="sent by staff",
+                command_id=request if isinstance(request, int) else None,
+            )
+            status, result = "RUNNING", f"on its way to {move.station.station_id}"
+        else:
+            session = battery_services.request_charge(
+                vehicle_id=int(command.get("vehicle", -1)),
+                station_id=station,
+                command_id=request if isinstance(request, int) else None,
+            )
+            status, result = "RUNNING", f"charge session {session.pk} queued"
+    except (DomainError, Vehicle.DoesNotExist, ValueError, TypeError) as exc:
+        # Refused, never raised: a bad command must not fail (and so repeat) the whole flush.
+        status, result = "REFUSED", str(exc) or type(exc).__name__
+    if isinstance(request, int):
+        order_services.record_command_outcome(command_id=request, status=status, result=result)
+
+
 def _apply(progress: Progress) -> None:
     order_id, detail = progress.order_id, progress.detail
+    if order_id < 0:  # a charge session or a move (see _jobs)
+        pk, source = divmod(-order_id, 2)
+        reason = detail.get("reason", "")
+        if JOB_SOURCES[source] == "park":
+            maintenance_services.apply_move_progress(move_id=pk, kind=progress.kind, reason=reason)
+        else:
+            battery_services.apply_charge_progress(session_id=pk, kind=progress.kind, reason=reason)
+        return
     if progress.kind == "sent":
         order_services.mark_order_sent(order_id=order_id)
     elif progress.kind == "started":
         order_services.mark_order_started(order_id=order_id)
     elif progress.kind == "step":
+        index = detail.get("index")
         order_services.mark_step_reached(
-            order_id=order_id, step=detail["step"], node_id=detail["node"]
+            order_id=order_id,
+            step=detail["step"],
+            node_id=detail["node"],
+            index=int(index) if index is not None and index.isdigit() else None,
         )
     elif progress.kind == "finished":
         order_services.mark_order_finished(order_id=order_id)

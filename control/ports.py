@@ -3,7 +3,7 @@
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from control.execution import LayoutIndex, Progress
+from control.execution import LayoutIndex, Progress, StepPlan
 from control.live import InstantActionTrack, LiveVehicle
 
 
@@ -22,6 +22,11 @@ class ActiveOrder:
     load_id: str = ""
     load_type: str = "EPAL"
     cancel_requested: bool = False
+    # "charge": a battery charge session ending in startCharging; "park": a drive to a park
+    # or maintenance station (maintenance.ServiceMove). Both have negative ids (persistence).
+    kind: str = "transport"
+    # The stops in order (route index, action); empty: pick at pickup_node, drop at the end.
+    steps: tuple[StepPlan, ...] = ()
 
 
 @dataclass
@@ -34,6 +39,7 @@ class FlushBatch:
     progress: list[Progress] = field(default_factory=list)
     command_outcomes: list[InstantActionTrack] = field(default_factory=list)
     newly_available: int = 0
+    job_requests: list[dict[str, Any]] = field(default_factory=list)  # vehicle.charge/.park
 
 
 class Store(Protocol):

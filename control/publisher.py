@@ -1,19 +1,31 @@
-"""Master-to-vehicle messages: built with the right header and published on the right topic."""
+"""Master-to-vehicle messages: built with the right header and published on the right topic.
 
+Before a message goes out it is checked against the vehicle's string limits (REFERENCE J.44,
+`control.limits`); one that does not fit raises ProtocolLimitError and is not sent, and its
+headerId is given back so the vehicle sees no gap. Order actions go out `retriable` to 3.0
+vehicles whose factsheet takes retry and skipRetry (E.27, `control.action_states`).
+"""
+
+import uuid
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from typing import Any
 
 import msgspec
 
 import vda5050
+from control.limits import ProtocolLimitError, check_message
 from control.live import LiveVehicle
 from control.versions import to_wire
-from vda5050 import encode
+from vda5050 import encode, v3
 from vda5050.enums import TopicKind
 from vda5050.headers import HeaderCounter, HeaderFields
 
 Publish = Callable[[str, bytes, int], None]
+
+__all__ = ["ProtocolLimitError", "Publish", "Publisher"]
+
+SENT_INSTANT_KEPT = 500  # instant action ids remembered per vehicle (3.0 clearing, E.28)
 
 
 class Publisher:
@@ -41,7 +53,7 @@ class Publisher:
             nodes=nodes,
             edges=edges,
         )
-        self._send(vehicle, TopicKind.ORDER, message)
+        self._send(vehicle, TopicKind.ORDER, message, retriable=_retriable(vehicle, nodes, edges))
 
     def instant_action(
         self,
@@ -52,33 +64,95 @@ class Publisher:
         parameters: dict[str, Any] | None = None,
     ) -> str:
         """Publish one instant action to `vehicle`; returns its actionId."""
+        if action_id is None:
+            action_id = _fresh_id(vehicle)
         action = vda5050.make_action(action_type, parameters, action_id=action_id)
         message = vda5050.InstantActions(
             **self._header(vehicle, TopicKind.INSTANT_ACTIONS), actions=[action]
         )
         self._send(vehicle, TopicKind.INSTANT_ACTIONS, message)
+        vehicle.sent_instant[action.action_id] = None
+        while len(vehicle.sent_instant) > SENT_INSTANT_KEPT:
+            del vehicle.sent_instant[next(iter(vehicle.sent_instant))]
         return action.action_id
+
+    def zone_set(self, vehicle: LiveVehicle, zone_set: v3.ZoneSetDefinition) -> None:
+        """Publish a 3.0 zone set on the vehicle's `zoneSet` topic (REFERENCE L.48)."""
+        message = v3.ZoneSet(**self._header(vehicle, TopicKind.ZONE_SET), zone_set=zone_set)
+        self._send(vehicle, TopicKind.ZONE_SET, message)
+
+    def responses(self, vehicle: LiveVehicle, responses: list[v3.Response]) -> None:
+        """Publish answers to 3.0 zone/edge requests on `responses` (REFERENCE L.49)."""
+        message = v3.Responses(**self._header(vehicle, TopicKind.RESPONSES), responses=responses)
+        self._send(vehicle, TopicKind.RESPONSES, message)
 
     def _header(self, vehicle: LiveVehicle, kind: TopicKind) -> HeaderFields:
         return self.headers.header(
             vehicle.manufacturer, vehicle.serial_number, kind, vehicle.version
         )
 
-    def _send(self, vehicle: LiveVehicle, kind: TopicKind, message: Any) -> None:
-        topic = vda5050.Topic(
-            interface_name=vehicle.interface_name,
-            major_version=vda5050.major_version_of(vehicle.version),
-            manufacturer=vehicle.manufacturer,
-            serial_number=vehicle.serial_number,
-            kind=kind,
+    def _send(
+        self,
+        vehicle: LiveVehicle,
+        kind: TopicKind,
+        message: Any,
+        *,
+        retriable: Collection[str] = (),
+    ) -> None:
+        topic = str(
+            vda5050.Topic(
+                interface_name=vehicle.interface_name,
+                major_version=vda5050.major_version_of(vehicle.version),
+                manufacturer=vehicle.manufacturer,
+                serial_number=vehicle.serial_number,
+                kind=kind,
+            )
         )
-        self.publish(str(topic), _encode_for(vehicle, kind, message), 0)
+        payload = _encode_for(vehicle, kind, message, retriable)
+        if vehicle.capabilities is not None:
+            try:
+                check_message(
+                    vehicle.capabilities.strings, topic, payload, msgspec.json.decode(payload)
+                )
+            except ProtocolLimitError:
+                # Not sent: the next message must carry this headerId (no gap for the vehicle).
+                self.headers.set_next(
+                    vehicle.manufacturer, vehicle.serial_number, kind, message.header_id
+                )
+                self.counters["limit_refused"] += 1
+                raise
+        self.publish(topic, payload, 0)
         self.counters[f"sent_{kind}"] += 1
 
 
-def _encode_for(vehicle: LiveVehicle, kind: TopicKind, message: Any) -> bytes:
+def _fresh_id(vehicle: LiveVehicle) -> str:
+    """A new unique actionId that fits the vehicle's idLen and idNumericalOnly (J.44)."""
+    fresh = uuid.uuid4()
+    strings = vehicle.capabilities.strings if vehicle.capabilities is not None else None
+    if strings is None:
+        return str(fresh)  # the spec's suggestion
+    text = str(fresh.int) if strings.id_numerical_only else fresh.hex
+    return text[: strings.id_len] if strings.id_len else text
+
+
+def _retriable(
+    vehicle: LiveVehicle, nodes: list[vda5050.Node], edges: list[vda5050.Edge]
+) -> frozenset[str]:
+    """Ids of the order actions to send `retriable` (3.0 vehicles that take retry/skipRetry)."""
+    capabilities = vehicle.capabilities
+    if vda5050.major_version_of(vehicle.version) != "v3" or capabilities is None:
+        return frozenset()
+    if not capabilities.retries_actions:
+        return frozenset()
+    actions = [a for n in nodes for a in n.actions] + [a for e in edges for a in e.actions]
+    return frozenset(a.action_id for a in actions)
+
+
+def _encode_for(
+    vehicle: LiveVehicle, kind: TopicKind, message: Any, retriable: Collection[str] = ()
+) -> bytes:
     """The message as this vehicle's version and stack expect it (docs/DIALECTS.md)."""
-    message = to_wire(kind, message, vehicle.version)
+    message = to_wire(kind, message, vehicle.version, retriable=retriable)
     if kind == TopicKind.INSTANT_ACTIONS and vehicle.dialect == "INSTANT_ACTIONS_KEY":
         data = msgspec.json.decode(encode(message))  # encode validates (no NaN, …)
         data["instantActions"] = data.pop("actions")

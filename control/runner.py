@@ -8,6 +8,7 @@ from typing import Any
 
 import paho.mqtt.client as mqtt
 
+from control import map_store
 from control.controller import Controller
 from control.ports import ActiveOrder
 from vda5050.enums import TopicKind
@@ -102,6 +103,8 @@ class ControlLoop:
                 commands = self._safely(self.receive_commands, 0.05) or []
                 for command in commands:
                     self._safely(self.controller.execute, command)
+                if any(str(c.get("kind", "")).startswith("maps.") for c in commands):
+                    self._safely(self._load_distribution)  # a release was distributed
                 now = time.monotonic()
                 if commands or now >= due["SYNC_INTERVAL"]:
                     self._safely(self._sync)
@@ -111,6 +114,7 @@ class ControlLoop:
                     due["REGISTRY_INTERVAL"] = now + self.intervals.get("REGISTRY_INTERVAL", 10.0)
                 if now >= due["FLUSH_INTERVAL"]:
                     self._safely(self.controller.flush)
+                    self._safely(self._save_distribution)
                     due["FLUSH_INTERVAL"] = now + self.intervals["FLUSH_INTERVAL"]
                 if now >= due["BROADCAST_INTERVAL"]:
                     rows = self.controller.collect_broadcast()
@@ -131,6 +135,23 @@ class ControlLoop:
             if self._layouts_revision is not None:
                 self.controller.layouts = store.load_layouts()
             self._layouts_revision = revision
+        self._load_distribution()  # releases and zone sets (cheap: a few rows)
+
+    def _load_distribution(self) -> None:
+        targets, zone_sets = map_store.load_targets()
+        with self.controller.lock:
+            self.controller.distribution.set_targets(targets, zone_sets)
+
+    def _save_distribution(self) -> None:
+        with self.controller.lock:
+            self.controller.distribution.tick()
+            rows = self.controller.distribution.collect_statuses()
+        try:
+            map_store.save_map_statuses(rows)
+        except Exception:
+            with self.controller.lock:
+                self.controller.distribution.requeue(rows)  # written with the next save
+            raise
 
     def _sync(self) -> None:
         orders: list[ActiveOrder] = self.controller.store.active_orders()

@@ -18,6 +18,7 @@ def build_control_loop() -> ControlLoop:
         store=DjangoStore(),
         interface_name=settings.VDA5050_INTERFACE,
         base_ahead=settings.FLEET_CONTROL["BASE_AHEAD"] or None,
+        traffic=settings.FLEET_CONTROL["TRAFFIC"],
     )
     client, address = make_client(settings.MQTT_URL, client_id_prefix="fleet-control")
     link = MqttLink(client, address.host, address.port, controller)

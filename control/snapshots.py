@@ -6,6 +6,7 @@ import msgspec
 
 from control.execution import LayoutIndex
 from control.live import LiveVehicle
+from control.traffic_link import TrafficLink
 
 
 def row(vehicle: LiveVehicle) -> dict[str, Any]:
@@ -34,6 +35,7 @@ def row(vehicle: LiveVehicle) -> dict[str, Any]:
             "operating_mode": "",
             "errors": [],
             "loads": [],
+            "loads_known": False,
             "order_id": "",
             "order_update_id": None,
             "last_node_id": "",
@@ -47,6 +49,8 @@ def row(vehicle: LiveVehicle) -> dict[str, Any]:
         "operating_mode": str(state.operating_mode),
         "errors": msgspec.to_builtins(state.errors),
         "loads": msgspec.to_builtins(state.loads or []),
+        # F.32: `loads` omitted = unknown, [] = unloaded (stored as [] either way; not a column)
+        "loads_known": state.loads is not None,
         "order_id": state.order_id,
         "order_update_id": state.order_update_id,
         "last_node_id": state.last_node_id,
@@ -70,8 +74,11 @@ def status_label(vehicle: LiveVehicle) -> str:
     return "idle" if vehicle.is_idle else "busy"
 
 
-def browser_row(vehicle: LiveVehicle, layouts: dict[str, LayoutIndex]) -> dict[str, Any]:
-    """What the live page draws and lists for one vehicle, including its remaining route."""
+def browser_row(
+    vehicle: LiveVehicle, layouts: dict[str, LayoutIndex], traffic: TrafficLink | None = None
+) -> dict[str, Any]:
+    """What the live page draws and lists for one vehicle, including its remaining route and,
+    with traffic management, whom it waits for and the nodes it has reserved beyond its base."""
     state, position = vehicle.state, vehicle.visual_position
     base: list[list[float]] = []
     horizon: list[list[float]] = []
@@ -81,6 +88,12 @@ def browser_row(vehicle: LiveVehicle, layouts: dict[str, LayoutIndex]) -> dict[s
             place = nodes.get(node_state.node_id)
             if place is not None:
                 (base if node_state.released else horizon).append([place.x, place.y])
+    waiting_for: list[str] = []
+    reserved: list[list[float]] = []
+    if traffic is not None and position is not None and position.map_id in layouts:
+        nodes = layouts[position.map_id].nodes
+        waiting_for = traffic.waiting_for(vehicle)
+        reserved = [[nodes[n].x, nodes[n].y] for n in traffic.reserved(vehicle) if n in nodes]
     return {
         "id": vehicle.pk,
         "manufacturer": vehicle.manufacturer,
@@ -100,6 +113,8 @@ def browser_row(vehicle: LiveVehicle, layouts: dict[str, LayoutIndex]) -> dict[s
         "errors": [f"{e.error_level} {e.error_type}" for e in state.errors] if state else [],
         "base": base,
         "horizon": horizon,
+        "waiting_for": waiting_for,
+        "reserved": reserved,
         "clock_skew": vehicle.session.clock_skew,
         "instant_actions": [
             {"type": a.action_type, "status": a.status, "reason": a.reason}

@@ -5,7 +5,7 @@ orders and instant actions on publish (REFERENCE §6, `vda5050.adapt`). The wire
 the topic's major level: a vehicle that changes firmware changes its topics too.
 """
 
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from typing import Any
 
 import vda5050
@@ -34,12 +34,13 @@ def to_model(kind: str, message: Any) -> Any:
     return message
 
 
-def to_wire(kind: str, message: Any, version: str) -> Any:
-    """An outbound 2.x order or instant actions in the vehicle's version."""
+def to_wire(kind: str, message: Any, version: str, *, retriable: Collection[str] = ()) -> Any:
+    """An outbound 2.x order or instant actions in the vehicle's version; order actions whose
+    ids are in `retriable` go out with `retriable: true` (3.0 only, REFERENCE E.27)."""
     if vda5050.major_version_of(version) != "v3":
         return message
     if kind == TopicKind.ORDER:
-        return adapt.order_v2_to_v3(message, version=version)
+        return adapt.order_v2_to_v3(message, version=version, retriable=retriable)
     if kind == TopicKind.INSTANT_ACTIONS:
         return adapt.instant_actions_v2_to_v3(message, version=version)
     return message

@@ -27,8 +27,11 @@ class LocalRedocView(SpectacularRedocView):
 
 urlpatterns = [
     path("", include("orders.api.urls")),
+    path("", include("orders.api.inventory_urls")),
     path("", include("robots.api.urls")),
     path("", include("maps.api.urls")),
+    path("", include("battery.api.urls")),
+    path("", include("maintenance.api.urls")),
     path("schema/", SpectacularAPIView.as_view(), name="api-schema"),
     path("docs/", SpectacularSwaggerView.as_view(url_name="api-schema"), name="api-docs"),
     path("redoc/", LocalRedocView.as_view(url_name="api-schema"), name="api-redoc"),

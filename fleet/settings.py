@@ -19,9 +19,28 @@ env = environ.Env()
 env.read_env(BASE_DIR / ".env", overwrite=False)
 
 DEBUG = env.bool("DEBUG", default=False)
-SECRET_KEY = env.str("SECRET_KEY", default="insecure-development-key-set-SECRET_KEY-in-production")
+# Secrets come from the environment or, for container secrets, from a file (SECRET_KEY_FILE).
+SECRET_KEY = (
+    Path(env.str("SECRET_KEY_FILE")).read_text().strip()
+    if env.str("SECRET_KEY_FILE", default="")
+    else env.str("SECRET_KEY", default="django-insecure-set-SECRET_KEY-in-production")
+)
 ALLOWED_HOSTS = env.list("ALLOWED_HOSTS", default=["localhost", "127.0.0.1", "[::1]", "testserver"])
 CSRF_TRUSTED_ORIGINS = env.list("CSRF_TRUSTED_ORIGINS", default=[])
+
+# Served over HTTPS (production): secure cookies, HSTS and a redirect to HTTPS. Off by default
+# because the demo serves plain HTTP on localhost, where secure cookies would break the login.
+FLEET_HTTPS = env.bool("FLEET_HTTPS", default=False)
+SECURE_SSL_REDIRECT = env.bool("SECURE_SSL_REDIRECT", default=FLEET_HTTPS)
+SESSION_COOKIE_SECURE = CSRF_COOKIE_SECURE = FLEET_HTTPS
+SECURE_HSTS_SECONDS = env.int("SECURE_HSTS_SECONDS", default=31_536_000 if FLEET_HTTPS else 0)
+SECURE_HSTS_INCLUDE_SUBDOMAINS = env.bool("SECURE_HSTS_INCLUDE_SUBDOMAINS", default=FLEET_HTTPS)
+SECURE_HSTS_PRELOAD = env.bool("SECURE_HSTS_PRELOAD", default=FLEET_HTTPS)
+if env.bool("FLEET_BEHIND_PROXY", default=False):  # TLS ends at a reverse proxy that says so
+    SECURE_PROXY_SSL_HEADER = ("HTTP_X_FORWARDED_PROTO", "https")
+SESSION_COOKIE_AGE = env.int("SESSION_COOKIE_AGE", default=12 * 3600)  # one shift
+# Request bodies beyond this are refused with 400 before parsing (LIF files of 5,000+ nodes fit).
+DATA_UPLOAD_MAX_MEMORY_SIZE = env.int("MAX_REQUEST_BYTES", default=32 * 1024 * 1024)
 
 INSTALLED_APPS = [
     "daphne",
@@ -36,6 +55,7 @@ INSTALLED_APPS = [
     "drf_spectacular",
     "drf_spectacular_sidecar",  # Swagger UI and Redoc served by the app (no CDN)
     "channels",
+    "axes",  # login throttling: locks a user name + address out after repeated failures
     "fleet",
     "maps",
     "robots",
@@ -55,8 +75,10 @@ MIDDLEWARE = [
     "django.middleware.common.CommonMiddleware",
     "django.middleware.csrf.CsrfViewMiddleware",
     "django.contrib.auth.middleware.AuthenticationMiddleware",
+    "fleet.audit.AuditMiddleware",  # services record who did what, from where
     "django.contrib.messages.middleware.MessageMiddleware",
     "django.middleware.clickjacking.XFrameOptionsMiddleware",
+    "axes.middleware.AxesMiddleware",  # last, as django-axes asks
 ]
 
 ROOT_URLCONF = "fleet.urls"
@@ -121,7 +143,28 @@ CELERY_WORKER_PREFETCH_MULTIPLIER = 1
 CELERY_BROKER_TRANSPORT_OPTIONS = {"visibility_timeout": 300}
 CELERY_BEAT_SCHEDULE = {
     "dispatch-cycle": {"task": "orders.tasks.dispatch_pending_orders", "schedule": 5.0},
+    "charging-cycle": {"task": "battery.tasks.plan_charging", "schedule": 5.0},
+    "service-plans": {"task": "maintenance.tasks.check_service_plans", "schedule": 60.0},
+    "reports-roll-up": {"task": "reports.tasks.roll_up_orders", "schedule": 60.0},
+    "reports-sample": {"task": "reports.tasks.sample_vehicles", "schedule": 15.0},
+    "alerts-escalate": {"task": "alerts.escalate", "schedule": 60.0},
 }
+
+# Alerts (issue 8): escalation mail goes through Django's email backend (console when no SMTP
+# host is configured, so a closed plant network never blocks on mail).
+EMAIL_BACKEND = env.str(
+    "EMAIL_BACKEND",
+    default="django.core.mail.backends.smtp.EmailBackend"
+    if env.str("EMAIL_HOST", default="")
+    else "django.core.mail.backends.console.EmailBackend",
+)
+EMAIL_HOST = env.str("EMAIL_HOST", default="localhost")
+EMAIL_PORT = env.int("EMAIL_PORT", default=25)
+DEFAULT_FROM_EMAIL = env.str("DEFAULT_FROM_EMAIL", default="fleet@localhost")
+ALERTS_LOW_BATTERY_PERCENT = env.float("ALERTS_LOW_BATTERY_PERCENT", default=20.0)
+ALERTS_NO_PROGRESS_SECONDS = env.float("ALERTS_NO_PROGRESS_SECONDS", default=120.0)
+# Shifts for the reports: (name, start hour in TIME_ZONE); each lasts until the next starts.
+REPORT_SHIFTS = [("early", 6), ("late", 14), ("night", 22)]
 
 # MQTT: Mosquitto in production; the embedded amqtt broker when MQTT_URL is unset.
 MQTT_EMBEDDED = not env.str("MQTT_URL", default="")
@@ -137,6 +180,9 @@ FLEET_CONTROL = {
     # How many route nodes ahead of a vehicle are released (its VDA 5050 base); the rest is
     # sent as horizon and released with order updates as the vehicle advances. 0 = all at once.
     "BASE_AHEAD": env.int("FLEET_BASE_AHEAD", default=3),
+    # Traffic management (control/traffic_link.py) decides each base; off = BASE_AHEAD only,
+    # enough for a single-vehicle site.
+    "TRAFFIC": env.bool("FLEET_TRAFFIC", default=True),
 }
 
 AUTH_PASSWORD_VALIDATORS = [
@@ -145,7 +191,23 @@ AUTH_PASSWORD_VALIDATORS = [
     {"NAME": "django.contrib.auth.password_validation.CommonPasswordValidator"},
     {"NAME": "django.contrib.auth.password_validation.NumericPasswordValidator"},
 ]
-LOGIN_URL = "admin:login"
+LOGIN_URL = "login"
+LOGIN_REDIRECT_URL = "/"
+LOGOUT_REDIRECT_URL = "login"
+AUTHENTICATION_BACKENDS = [
+    "axes.backends.AxesStandaloneBackend",  # refuses locked-out logins before checking them
+    "django.contrib.auth.backends.ModelBackend",
+]
+# After AXES_FAILURE_LIMIT failed logins for one user name from one address, that pair is locked
+# out for AXES_COOLOFF_MINUTES (HTTP 429); a successful login resets the count.
+AXES_FAILURE_LIMIT = env.int("AXES_FAILURE_LIMIT", default=5)
+AXES_COOLOFF_TIME = env.float("AXES_COOLOFF_MINUTES", default=15) / 60
+AXES_LOCKOUT_PARAMETERS = [["username", "ip_address"]]
+AXES_RESET_ON_SUCCESS = True
+AXES_HTTP_RESPONSE_CODE = 429
+if env.bool("FLEET_BEHIND_PROXY", default=False):
+    AXES_IPWARE_PROXY_COUNT = 1
+    AXES_IPWARE_META_PRECEDENCE_ORDER = ["HTTP_X_FORWARDED_FOR", "REMOTE_ADDR"]
 
 REST_FRAMEWORK = {
     "DEFAULT_AUTHENTICATION_CLASSES": [
@@ -159,6 +221,15 @@ REST_FRAMEWORK = {
     "DEFAULT_PAGINATION_CLASS": "orders.api.pagination.BoundedLimitOffsetPagination",
     "PAGE_SIZE": 50,
     "DEFAULT_SCHEMA_CLASS": "drf_spectacular.openapi.AutoSchema",
+    # Per integration client (its user) and per address for anonymous calls: 429 beyond.
+    "DEFAULT_THROTTLE_CLASSES": [
+        "rest_framework.throttling.AnonRateThrottle",
+        "rest_framework.throttling.UserRateThrottle",
+    ],
+    "DEFAULT_THROTTLE_RATES": {
+        "anon": env.str("API_ANON_RATE", default="120/min"),
+        "user": env.str("API_CLIENT_RATE", default="6000/min"),
+    },
 }
 
 SPECTACULAR_SETTINGS = {
@@ -204,5 +275,6 @@ LOGGING = {
     "loggers": {
         "django.channels.server": {"level": "WARNING"},
         "celery.app.trace": {"level": "WARNING"},  # one line per task drowns the rest
+        "axes": {"level": "WARNING"},  # one line per start and per login otherwise
     },
 }

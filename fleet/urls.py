@@ -3,9 +3,20 @@
 from django.contrib import admin
 from django.urls import include, path
 
+from fleet import views
+
 urlpatterns = [
     path("admin/", admin.site.urls),
+    path("accounts/", include("django.contrib.auth.urls")),  # login for staff who are not admins
+    path("audit/", views.audit_page, name="audit"),
+    path("audit.csv", views.audit_csv, name="audit-csv"),
     path("api/v1/", include("fleet.api_urls")),
     path("layouts/", include("maps.urls")),
+    path("reports/", include("reports.urls")),
+    path("orders/", include("orders.urls")),
+    path("energy/", include("battery.urls")),
+    path("maintenance/", include("maintenance.urls")),
+    path("alerts/", include("alerts.urls")),
+    path("inventory/", include("inventory.urls")),
     path("", include("control.urls")),
 ]

@@ -16,6 +16,7 @@ from django.template.response import TemplateResponse
 from django.urls import URLPattern, path, reverse
 from django.utils.html import format_html
 
+from fleet.exceptions import InvalidRequestError
 from maps.lif.export import export_lif
 from maps.models import (
     Edge,
@@ -23,6 +24,7 @@ from maps.models import (
     Layout,
     LifImport,
     Map,
+    MapRelease,
     MapVersion,
     Node,
     NodeProperty,
@@ -33,7 +35,13 @@ from maps.models import (
     Zone,
 )
 from maps.selectors import validate_layout
-from maps.services import import_lif, mark_layout_changed, set_zones_enabled
+from maps.services import (
+    distribute_release,
+    import_lif,
+    mark_layout_changed,
+    release_map,
+    set_zones_enabled,
+)
 from maps.services.zones import counter_clockwise
 
 MAX_FINDING_MESSAGES = 20
@@ -92,7 +100,7 @@ class MapAdmin(admin.ModelAdmin[Map]):
     list_filter = ["site"]
     search_fields = ["map_id", "name"]
     readonly_fields = ["revision", "version", "lif_import", "source_id"]
-    actions = ["validate", "export"]
+    actions = ["validate", "export", "release_and_distribute"]
     change_form_template = "admin/maps/map/change_form.html"
     inlines = [MapVersionInline]
     fieldsets = [
@@ -129,6 +137,16 @@ class MapAdmin(admin.ModelAdmin[Map]):
                 self.message_user(
                     request, str(finding), messages.ERROR if severe else messages.WARNING
                 )
+
+    @admin.action(description="Release the selected maps as files for the vehicles and distribute")
+    def release_and_distribute(self, request: HttpRequest, queryset: QuerySet[Map]) -> None:
+        for layout in queryset:
+            try:
+                release = release_map(map=layout, user=request.user, distribute=True)
+            except InvalidRequestError as exc:
+                self.message_user(request, f"{layout.map_id}: {exc}", messages.ERROR)
+                continue
+            self.message_user(request, f"released and distributing {release}", messages.SUCCESS)
 
     @admin.action(description="Export the selected maps as a LIF file")
     def export(self, request: HttpRequest, queryset: QuerySet[Map]) -> HttpResponse:
@@ -288,3 +306,49 @@ class ZoneAdmin(LayoutChangeAdmin):
     def disable(self, request: HttpRequest, queryset: QuerySet[Zone]) -> None:
         count = set_zones_enabled(zones=queryset.select_related("map"), enabled=False)
         self.message_user(request, f"{count} zone(s) disabled", messages.SUCCESS)
+
+
+@admin.register(MapRelease)
+class MapReleaseAdmin(admin.ModelAdmin[MapRelease]):
+    """Released map files; release from the map list, distribute here (REFERENCE K.47)."""
+
+    list_display = ["map", "version", "checksum_short", "size", "created_at", "distributed_at"]
+    list_filter = ["map"]
+    readonly_fields = [
+        "map",
+        "number",
+        "version",
+        "file_format",
+        "checksum",
+        "size",
+        "revision",
+        "created_at",
+        "created_by",
+        "distributed_at",
+        "distributed_by",
+        "download_link",
+    ]
+    fields = [*readonly_fields, "note"]
+    actions = ["distribute"]
+
+    def has_add_permission(self, request: HttpRequest) -> bool:
+        return False  # releases come from the map list's action (release_map)
+
+    @admin.display(description="checksum")
+    def checksum_short(self, obj: MapRelease) -> str:
+        return obj.checksum[:12]
+
+    @admin.display(description="file")
+    def download_link(self, obj: MapRelease) -> str:
+        url = reverse("maps:release-file", args=[obj.token, obj.file_name])
+        return format_html('<a href="{}">{}</a>', url, obj.file_name)
+
+    @admin.action(description="Distribute the selected release to the vehicles")
+    def distribute(self, request: HttpRequest, queryset: QuerySet[MapRelease]) -> None:
+        releases = list(queryset.select_related("map"))
+        if len({r.map_id for r in releases}) != len(releases):
+            self.message_user(request, "choose at most one release per map", messages.ERROR)
+            return
+        for release in releases:
+            distribute_release(release=release, user=request.user)
+            self.message_user(request, f"{release}: distributing to the vehicles", messages.SUCCESS)

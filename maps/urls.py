@@ -11,4 +11,5 @@ urlpatterns = [
     path("<int:pk>/check/", views.layout_check, name="check"),
     path("<int:pk>/save/", views.layout_save, name="save"),
     path("<int:pk>/floor-plan/", views.floor_plan, name="floor-plan"),
+    path("releases/<str:token>/<str:name>", views.release_file, name="release-file"),
 ]

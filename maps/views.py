@@ -14,11 +14,11 @@ from typing import Any
 from django.contrib.admin.views.decorators import staff_member_required
 from django.http import FileResponse, Http404, HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import get_object_or_404, redirect, render
-from django.views.decorators.http import require_POST
+from django.views.decorators.http import require_GET, require_POST
 
 from maps.forms import NewMapForm
 from maps.models import Map
-from maps.selectors import editor_data, validate_layout
+from maps.selectors import editor_data, release_by_token, validate_layout
 from maps.selectors.editor import list_editable_maps
 from maps.services import (
     LayoutConflictError,
@@ -139,3 +139,21 @@ def _payload(request: HttpRequest) -> tuple[Any, JsonResponse | None]:
         return json.loads(body), None
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         return None, JsonResponse({"detail": f"not valid JSON: {exc}"}, status=400)
+
+
+@require_GET
+def release_file(request: HttpRequest, token: str, name: str) -> HttpResponse:
+    """A released map file, for vehicles (`downloadMap`'s mapDownloadLink).
+
+    Vehicles cannot log in, so the unguessable token in the URL is the access check; the file
+    name must match too. The checksum goes along as `X-Checksum-SHA256` (also the `mapHash`).
+    """
+    release = release_by_token(token=token)
+    if release is None or name != release.file_name:
+        raise Http404("no such map release")
+    response = HttpResponse(bytes(release.content), content_type="application/json")
+    response["Content-Disposition"] = f'attachment; filename="{release.file_name}"'
+    response["X-Checksum-SHA256"] = release.checksum
+    response["X-Content-Type-Options"] = "nosniff"
+    response["Cache-Control"] = "private, max-age=3600"  # a release never changes
+    return response

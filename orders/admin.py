@@ -7,12 +7,14 @@ from django.db import models
 from django.db.models import QuerySet
 from django.http import HttpRequest
 
+from fleet.exceptions import DomainError
 from orders import services
 from orders.models import (
     ApiToken,
     IdempotencyKey,
     IntegrationClient,
     OrderEvent,
+    OrderStep,
     TransportOrder,
     VehicleCommand,
     WebhookAttempt,
@@ -41,8 +43,24 @@ class OrderEventInline(ReadOnlyInline):
     )
 
 
+class OrderStepInline(ReadOnlyInline):
+    model = OrderStep
+    fields = readonly_fields = (
+        "index",
+        "station",
+        "operation",
+        "action_type",
+        "parameters",
+        "finished_at",
+    )
+
+
 @admin.register(TransportOrder)
 class TransportOrderAdmin(admin.ModelAdmin[TransportOrder]):
+    """Orders; staff create pick → drop orders here (multi-stop ones on the orders page), and
+    cancel, reprioritise and reassign them with the actions or by editing priority, deadline
+    and intended vehicle, all through the services."""
+
     list_display = [
         "__str__",
         "source",
@@ -57,11 +75,15 @@ class TransportOrderAdmin(admin.ModelAdmin[TransportOrder]):
     ]
     list_filter = ["status", "source__map"]
     search_fields = ["external_ref", "load_id", "vda_order_id"]
-    raw_id_fields = ["source", "destination", "vehicle"]
+    raw_id_fields = ["source", "destination", "vehicle", "intended_vehicle"]
+    actions = ["cancel_orders", "raise_priority", "lower_priority", "release_to_any_vehicle"]
     readonly_fields = [
         "status",
         "vehicle",
         "route",
+        "route_steps",
+        "sequence",
+        "sequence_index",
         "vda_order_id",
         "dispatch_note",
         "failure_reason",
@@ -72,14 +94,20 @@ class TransportOrderAdmin(admin.ModelAdmin[TransportOrder]):
         "finished_at",
         "created_by",
     ]
-    inlines = [OrderEventInline]
+    inlines = [OrderStepInline, OrderEventInline]
+
+    def get_readonly_fields(self, request: HttpRequest, obj: Any = None) -> list[str]:
+        # Stops and type are fixed once the order exists (steps live in their own rows).
+        fixed = ["source", "destination", "vehicle_type"] if obj is not None else []
+        return [*self.readonly_fields, *fixed]
 
     def save_model(
         self, request: HttpRequest, obj: TransportOrder, form: Any, change: bool
     ) -> None:
-        """New orders go through the service (validation, timeline, dispatch), never a bare save."""
+        """Orders are created and changed through the services (validation, timeline, dispatch),
+        never by a bare save that could overwrite what control wrote meanwhile."""
         if change:
-            super().save_model(request, obj, form, change)
+            self._change(request, obj, set(form.changed_data))
             return
         created = services.create_transport_order(
             source=obj.source,
@@ -90,9 +118,79 @@ class TransportOrderAdmin(admin.ModelAdmin[TransportOrder]):
             external_ref=obj.external_ref,
             earliest_start=obj.earliest_start,
             deadline=obj.deadline,
+            intended_vehicle=obj.intended_vehicle,
+            vehicle_type=obj.vehicle_type,
+            metadata=obj.metadata,
             created_by=request.user,
         )
         obj.pk = created.pk
+
+    def _change(self, request: HttpRequest, obj: TransportOrder, changed: set[str]) -> None:
+        try:
+            if changed & {"priority", "deadline"}:
+                services.update_order_priority(
+                    order=obj,
+                    priority=obj.priority,
+                    deadline=obj.deadline,
+                    change_deadline="deadline" in changed,
+                    by=request.user,
+                )
+            if "intended_vehicle" in changed:
+                services.reassign_order(order=obj, vehicle=obj.intended_vehicle, by=request.user)
+        except DomainError as exc:
+            self.message_user(request, str(exc), messages.ERROR)
+        plain = changed & {"load_id", "load_type", "external_ref", "earliest_start", "metadata"}
+        if plain:
+            TransportOrder.objects.filter(pk=obj.pk).update(**{f: getattr(obj, f) for f in plain})
+
+    def _each(self, request: HttpRequest, queryset: QuerySet[TransportOrder], act: Any) -> None:
+        done = 0
+        for order in queryset:
+            try:
+                act(order)
+                done += 1
+            except DomainError as exc:
+                self.message_user(request, f"order {order.pk}: {exc}", messages.WARNING)
+        if done:
+            self.message_user(request, f"{done} order(s) changed")
+
+    @admin.action(description="Cancel the selected orders")
+    def cancel_orders(self, request: HttpRequest, queryset: QuerySet[TransportOrder]) -> None:
+        self._each(
+            request,
+            queryset,
+            lambda o: services.cancel_transport_order(order=o, reason="admin", by=request.user),
+        )
+
+    @admin.action(description="Raise priority by 10")
+    def raise_priority(self, request: HttpRequest, queryset: QuerySet[TransportOrder]) -> None:
+        self._each(
+            request,
+            queryset,
+            lambda o: services.update_order_priority(
+                order=o, priority=min(o.priority + 10, 1000), by=request.user
+            ),
+        )
+
+    @admin.action(description="Lower priority by 10")
+    def lower_priority(self, request: HttpRequest, queryset: QuerySet[TransportOrder]) -> None:
+        self._each(
+            request,
+            queryset,
+            lambda o: services.update_order_priority(
+                order=o, priority=max(o.priority - 10, -1000), by=request.user
+            ),
+        )
+
+    @admin.action(description="Give back to dispatch for any vehicle (unsent orders)")
+    def release_to_any_vehicle(
+        self, request: HttpRequest, queryset: QuerySet[TransportOrder]
+    ) -> None:
+        self._each(
+            request,
+            queryset,
+            lambda o: services.reassign_order(order=o, vehicle=None, by=request.user),
+        )
 
 
 class ApiTokenInline(ReadOnlyInline):
@@ -238,3 +336,7 @@ class VehicleCommandAdmin(admin.ModelAdmin[VehicleCommand]):
 
     def has_change_permission(self, request: HttpRequest, obj: object = None) -> bool:
         return False
+
+
+# Order sequences and recurring orders (a module of their own to keep this one readable).
+import orders.admin_schedules  # noqa: E402, F401

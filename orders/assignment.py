@@ -2,8 +2,11 @@
 
 Dispatch (`orders.services.dispatch`) turns rows into `Job`s and `Candidate`s, and the benchmark
 builds them in memory. `plan_batch` solves one assignment problem per cycle with
-`scipy.optimize.linear_sum_assignment` over the routing distance from each vehicle to each
-order's pickup; `plan_greedy` is the nearest-vehicle loop it replaced, kept as the baseline.
+`scipy.optimize.linear_sum_assignment` over the cost (travel time, or distance) from each
+vehicle to each order's first stop; `plan_greedy` is the nearest-vehicle loop it replaced, kept
+as the baseline. A vehicle's `profile` (its vehicle type) selects its cost table, so vehicles of
+different types see different routes; a job's `allowed` names the only vehicles that may take it
+(intended vehicle, vehicle type, capabilities).
 
 Rules of the batch:
 - Only as many orders as there are idle vehicles enter a cycle, most urgent first (priority,
@@ -15,7 +18,8 @@ Rules of the batch:
 """
 
 import math
-from collections.abc import Callable, Sequence
+from collections import Counter, defaultdict
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta
 
@@ -26,6 +30,8 @@ DUE_SOON = timedelta(minutes=15)  # a deadline this close makes an order count d
 _TIE_BREAK = 1e-3  # metres per rank of idle time: decides between vehicles within ~0.2 m
 
 DistancesTo = Callable[[str], dict[str, float]]
+# Costs to a goal for vehicles of one profile (vehicle type): (goal, profile) -> {node: cost}.
+ProfileCostsTo = Callable[[str, Hashable], dict[str, float]]
 
 
 @dataclass(frozen=True)
@@ -38,15 +44,89 @@ class Job:
     priority: int = 0
     deadline: datetime | None = None
     created: datetime | None = None
+    allowed: frozenset[int] | None = None  # keys of the only candidates that may take it
 
 
 @dataclass(frozen=True)
 class Candidate:
-    """An idle vehicle: where it stands and since when it has had nothing to do."""
+    """An idle vehicle: where it stands, since when it has had nothing to do, and the profile
+    (vehicle type) whose cost table prices its travel (None: the default table)."""
 
     key: int
     node: str
     idle_since: datetime | None = None  # None: never had an order, the longest idle of all
+    profile: Hashable | None = None
+
+
+class _Costs:
+    """Cost from a candidate to a job's pickup, cached per (pickup, profile); None: cannot.
+
+    Profiles are numbered once per cycle: hashing a profile (a dataclass) for every lookup
+    cost more than the lookups themselves."""
+
+    def __init__(
+        self,
+        distances_to: DistancesTo,
+        by_profile: ProfileCostsTo | None,
+        candidates: Sequence[Candidate],
+    ) -> None:
+        self._default, self._by_profile = distances_to, by_profile
+        self._tables: dict[tuple[str, int], dict[str, float]] = {}
+        self._candidates = candidates
+        numbers: dict[Hashable | None, int] = {}
+        self._profile: dict[int, int] = {}  # candidate key -> profile number
+        # Vehicles per profile and node, so "how many can reach this pickup" costs one lookup
+        # per distinct (profile, node), not one per vehicle.
+        self._nodes: dict[int, Counter[str]] = defaultdict(Counter)
+        for vehicle in candidates:
+            number = numbers.setdefault(vehicle.profile, len(numbers))
+            self._profile[vehicle.key] = number
+            self._nodes[number][vehicle.node] += 1
+        self._profiles = list(numbers)
+        self._able: dict[tuple[str, frozenset[int] | None], int] = {}
+
+    def __call__(self, job: Job, vehicle: Candidate) -> float | None:
+        if job.allowed is not None and vehicle.key not in job.allowed:
+            return None
+        return self.table(job.pickup, self._profile[vehicle.key]).get(vehicle.node)
+
+    def table(self, pickup: str, number: int) -> dict[str, float]:
+        key = (pickup, number)
+        table = self._tables.get(key)
+        if table is None:
+            profile = self._profiles[number]
+            if profile is None or self._by_profile is None:
+                table = self._default(pickup)
+            else:
+                table = self._by_profile(pickup, profile)
+            self._tables[key] = table
+        return table
+
+    def able(self, job: Job) -> int:
+        """How many of all candidates can take `job` (this runs for every job of a backlog)."""
+        key = (job.pickup, job.allowed)
+        total = self._able.get(key)
+        if total is not None:  # many jobs share a pickup station (and a restriction)
+            return total
+        if job.allowed is not None:
+            total = sum(1 for v in self._candidates if self(job, v) is not None)
+        else:
+            total = 0
+            for number, nodes in self._nodes.items():
+                table = self.table(job.pickup, number)
+                total += sum(count for node, count in nodes.items() if node in table)
+        self._able[key] = total
+        return total
+
+    def row(self, job: Job, vehicles: Sequence[Candidate]) -> list[float | None]:
+        """Costs from each of `vehicles` to `job` (one table lookup per profile)."""
+        numbers = [self._profile[v.key] for v in vehicles]
+        tables = {n: self.table(job.pickup, n) for n in set(numbers)}
+        allowed = job.allowed
+        return [
+            None if allowed is not None and v.key not in allowed else tables[n].get(v.node)
+            for v, n in zip(vehicles, numbers, strict=True)
+        ]
 
 
 @dataclass
@@ -78,68 +158,72 @@ def plan_batch(
     distances_to: DistancesTo,
     *,
     now: datetime | None = None,
+    by_profile: ProfileCostsTo | None = None,
 ) -> Plan:
     """Assign up to len(candidates) of the most urgent reachable jobs at least weighted cost."""
-    plan, reachable, distances = _triage(jobs, candidates, distances_to)
+    costs = _Costs(distances_to, by_profile, candidates)
+    plan, reachable = _triage(jobs, candidates, costs)
     free = _by_idle_time(candidates)
     waiting, unserved = reachable, []
     while waiting and free:
         # A job the solver leaves out cannot reach any vehicle still free (serving it would
         # always be cheaper), so it waits for the next cycle; the next jobs get a chance.
         batch, waiting = waiting[: len(free)], waiting[len(free) :]
-        assigned = _solve(batch, free, distances, now)
+        assigned = _solve(batch, free, costs, now)
         plan.pairs.extend(assigned)
         served = {job.key for job, _, _ in assigned}
         taken = {vehicle.key for _, vehicle, _ in assigned}
         unserved += [job for job in batch if job.key not in served]
         free = [vehicle for vehicle in free if vehicle.key not in taken]
     for job in unserved + waiting:
-        plan.notes[job.key] = _waiting_note(job, candidates, distances)
+        plan.notes[job.key] = _waiting_note(job, candidates, costs)
     return plan
 
 
 def plan_greedy(
-    jobs: Sequence[Job], candidates: Sequence[Candidate], distances_to: DistancesTo
+    jobs: Sequence[Job],
+    candidates: Sequence[Candidate],
+    distances_to: DistancesTo,
+    *,
+    by_profile: ProfileCostsTo | None = None,
 ) -> Plan:
     """The baseline: in urgency order, each job takes the nearest free vehicle."""
-    plan, reachable, distances = _triage(jobs, candidates, distances_to)
+    costs = _Costs(distances_to, by_profile, candidates)
+    plan, reachable = _triage(jobs, candidates, costs)
     free = list(candidates)
     for job in reachable:
-        distance = distances[job.pickup]
-        options = [v for v in free if v.node in distance]
+        options = [(cost, v.key, v) for v in free if (cost := costs(job, v)) is not None]
         if not options:
-            plan.notes[job.key] = _waiting_note(job, candidates, distances)
+            plan.notes[job.key] = _waiting_note(job, candidates, costs)
             continue
-        vehicle = min(options, key=lambda v: (distance[v.node], v.key))
-        plan.pairs.append((job, vehicle, distance[vehicle.node]))
+        cost, _, vehicle = min(options, key=lambda option: option[:2])
+        plan.pairs.append((job, vehicle, cost))
         free.remove(vehicle)
     return plan
 
 
 def _triage(
-    jobs: Sequence[Job], candidates: Sequence[Candidate], distances_to: DistancesTo
-) -> tuple[Plan, list[Job], dict[str, dict[str, float]]]:
-    """Sort by urgency, note the jobs no idle vehicle can reach, and cache distances per pickup."""
+    jobs: Sequence[Job], candidates: Sequence[Candidate], costs: _Costs
+) -> tuple[Plan, list[Job]]:
+    """Sort by urgency and note the jobs no idle vehicle can reach."""
     plan = Plan()
-    distances: dict[str, dict[str, float]] = {}
     reachable: list[Job] = []
-    nodes = {vehicle.node for vehicle in candidates}
     for job in sorted(jobs, key=urgency_key):
-        if job.pickup not in distances:
-            distances[job.pickup] = distances_to(job.pickup)
-        if nodes & distances[job.pickup].keys():
+        if costs.able(job):
             reachable.append(job)
-        elif candidates:
-            plan.notes[job.key] = f"no vehicle can reach {job.station}"
-        else:
+        elif not candidates:
             plan.notes[job.key] = "no vehicle available"
-    return plan, reachable, distances
+        elif job.allowed is not None and not job.allowed & {v.key for v in candidates}:
+            plan.notes[job.key] = "waiting: no vehicle allowed to take it is idle"
+        else:
+            plan.notes[job.key] = f"no vehicle can reach {job.station}"
+    return plan, reachable
 
 
 def _solve(
     jobs: list[Job],
     vehicles: list[Candidate],
-    distances: dict[str, dict[str, float]],
+    costs: _Costs,
     now: datetime | None,
 ) -> list[tuple[Job, Candidate, float]]:
     """One assignment problem. Besides the vehicles, each job (sorted by urgency) may take a
@@ -148,19 +232,18 @@ def _solve(
     only among equally served sets does travel decide."""
     raw = np.full((len(jobs), len(vehicles)), np.inf)
     for row, job in enumerate(jobs):
-        distance = distances[job.pickup]
-        for column, vehicle in enumerate(vehicles):
-            if vehicle.node in distance:
-                raw[row, column] = distance[vehicle.node]
-    cost = raw * _urgency_weights(jobs, now)[:, None]
-    cost += np.arange(len(vehicles))[None, :] * _TIE_BREAK  # vehicles are sorted by idle time
-    finite = cost[np.isfinite(cost)]
+        for column, cost in enumerate(costs.row(job, vehicles)):
+            if cost is not None:
+                raw[row, column] = cost
+    weighted = raw * _urgency_weights(jobs, now)[:, None]
+    weighted += np.arange(len(vehicles))[None, :] * _TIE_BREAK  # vehicles sorted by idle time
+    finite = weighted[np.isfinite(weighted)]
     if not finite.size:
         return []
     step = float(finite.max()) * len(jobs) + 1.0
     unserved = np.full((len(jobs), len(jobs)), np.inf)
     np.fill_diagonal(unserved, step * (len(jobs) - np.arange(len(jobs))))
-    rows, columns = linear_sum_assignment(np.hstack([cost, unserved]))
+    rows, columns = linear_sum_assignment(np.hstack([weighted, unserved]))
     return [
         (jobs[row], vehicles[column], float(raw[row, column]))
         for row, column in zip(rows, columns, strict=True)
@@ -189,11 +272,8 @@ def _timestamp(moment: datetime | None, default: float) -> float:
     return moment.timestamp() if moment is not None else default
 
 
-def _waiting_note(
-    job: Job, candidates: Sequence[Candidate], distances: dict[str, dict[str, float]]
-) -> str:
-    able = [v for v in candidates if v.node in distances[job.pickup]]
-    if len(able) < len(candidates):
+def _waiting_note(job: Job, candidates: Sequence[Candidate], costs: _Costs) -> str:
+    if costs.able(job) < len(candidates):
         return (
             f"waiting: the vehicles that can reach {job.station} are busy with more urgent orders"
         )

@@ -15,6 +15,13 @@ DEFAULTS: dict[str, Any] = {
     # taken to be abandoned (its request died) and may be claimed again.
     "IDEMPOTENCY_STALE_AFTER": 60.0,
     "IDEMPOTENCY_TTL": 24 * 3600.0,  # keys are kept this long, then pruned
+    # What happens to the active orders of a vehicle that is offline, unreachable, has a FATAL
+    # error or is in manual mode for LOST_VEHICLE_GRACE seconds: "wait" (it keeps them and
+    # resumes when back, as VDA 5050 intends), "reassign" (orders it never received go back to
+    # dispatch; the others wait) or "fail" (orders it never received fail; the others are
+    # cancelled, which control carries out when the vehicle is back). Recorded on each order.
+    "LOST_VEHICLE_POLICY": "wait",
+    "LOST_VEHICLE_GRACE": 120.0,
     "WEBHOOK_TIMEOUT": 5.0,  # seconds for connect and for each read of one attempt
     "WEBHOOK_MAX_ATTEMPTS": 8,
     "WEBHOOK_RETRY_BASE": 10.0,  # seconds before the 2nd attempt; doubles each time

@@ -5,21 +5,101 @@ from dataclasses import dataclass, field
 from datetime import datetime, timedelta
 from typing import Any
 
-from django.db.models import F, Max, Q, QuerySet
+from django.db.models import F, Max, Prefetch, Q, QuerySet
 
-from orders.models import TransportOrder, VehicleCommand, WebhookDelivery, WebhookSubscription
+from maps.models import VehicleType
+from orders import capability
+from orders.models import (
+    OrderSequence,
+    OrderStep,
+    TransportOrder,
+    VehicleCommand,
+    WebhookDelivery,
+    WebhookSubscription,
+)
 from robots.models import Vehicle
 
 Status = TransportOrder.Status
 
 
 def list_pending_orders() -> QuerySet[TransportOrder]:
-    """Orders waiting for a vehicle, most urgent first (priority, deadline, age)."""
+    """Orders waiting for a vehicle, most urgent first (priority, deadline, age), with steps."""
     return (
         TransportOrder.objects.filter(status=Status.NEW, cancel_requested=False)
-        .select_related("source__node", "source__map", "destination__node")
+        .select_related(
+            "source__node", "source__map", "destination__node", "intended_vehicle", "vehicle_type"
+        )
+        .prefetch_related(
+            Prefetch("steps", queryset=OrderStep.objects.select_related("station__node"))
+        )
         .order_by("-priority", F("deadline").asc(nulls_last=True), "created_at", "pk")
     )
+
+
+@dataclass
+class SequenceGate:
+    """How order sequences constrain a dispatch cycle: orders that wait for an earlier order of
+    their sequence (with the note), the vehicle each sequence is bound to, and the vehicles
+    reserved by sequences that still have open orders."""
+
+    waiting: dict[int, str] = field(default_factory=dict)
+    vehicle_of: dict[int, int] = field(default_factory=dict)  # sequence -> vehicle
+    reserved: dict[int, int] = field(default_factory=dict)  # vehicle -> sequence
+
+
+def get_sequence_gate(*, orders: list[TransportOrder]) -> SequenceGate:
+    """The sequence constraints for `orders` (pending): one query when any order is in a
+    sequence, two more for the reservations."""
+    gate = SequenceGate()
+    open_sequences = OrderSequence.objects.filter(
+        vehicle__isnull=False, orders__status__in=TransportOrder.OPEN_STATUSES
+    ).distinct()
+    for sequence_pk, vehicle_pk in open_sequences.values_list("pk", "vehicle_id"):
+        gate.vehicle_of[sequence_pk] = vehicle_pk
+        gate.reserved[vehicle_pk] = sequence_pk
+    sequenced = [o for o in orders if o.sequence_id is not None]
+    if not sequenced:
+        return gate
+    first_open: dict[int, tuple[int, int]] = {}  # sequence -> (index, pk) of its first open
+    rows = (
+        TransportOrder.objects.filter(
+            sequence_id__in={o.sequence_id for o in sequenced},
+            status__in=TransportOrder.OPEN_STATUSES,
+        )
+        .order_by("sequence_id", "sequence_index")
+        .values_list("sequence_id", "sequence_index", "pk")
+    )
+    for sequence_pk, index, pk in rows:
+        first_open.setdefault(sequence_pk, (index or 0, pk))
+    for order in sequenced:
+        place = order.sequence_index or 0
+        index, pk = first_open.get(order.sequence_id or 0, (place, order.pk))
+        if pk != order.pk and index < place:
+            gate.waiting[order.pk] = f"waits for order {pk} of its sequence"
+    return gate
+
+
+def get_vehicle_types(*, vehicles: list[Vehicle]) -> dict[int, VehicleType]:
+    """The layout vehicle type of each vehicle whose factsheet names a known one: the type id
+    `manufacturer.seriesName` (LIF's convention) or `seriesName`, or a type with that
+    manufacturer and series name. Vehicles of unknown type are left out."""
+    types = list(VehicleType.objects.all())
+    by_id = {t.type_id: t for t in types}
+    by_series = {(t.manufacturer, t.series_name): t for t in types if t.series_name}
+    found: dict[int, VehicleType] = {}
+    for vehicle in vehicles:
+        series = capability.series_name(vehicle.factsheet)
+        if not series:
+            continue
+        match = (
+            by_id.get(f"{vehicle.manufacturer}.{series}")
+            or by_id.get(series)
+            or by_series.get((vehicle.manufacturer, series))
+            or by_series.get(("", series))
+        )
+        if match is not None:
+            found[vehicle.pk] = match
+    return found
 
 
 def list_idle_vehicles() -> list[Vehicle]:
@@ -104,8 +184,12 @@ def get_idle_since(*, vehicle_ids: list[int]) -> dict[int, datetime]:
 
 def list_active_orders() -> QuerySet[TransportOrder]:
     """Orders that a vehicle is assigned to or driving: what `control` executes."""
-    return TransportOrder.objects.filter(status__in=TransportOrder.ACTIVE_STATUSES).select_related(
-        "vehicle", "source__node", "destination__node", "source__map"
+    return (
+        TransportOrder.objects.filter(status__in=TransportOrder.ACTIVE_STATUSES)
+        .select_related("vehicle", "source__node", "destination__node", "source__map")
+        .prefetch_related(
+            Prefetch("steps", queryset=OrderStep.objects.select_related("station__node"))
+        )
     )
 
 
@@ -137,8 +221,10 @@ def list_stale_assignments(*, assigned_before: datetime) -> QuerySet[TransportOr
 def list_transport_orders(*, filters: dict[str, Any]) -> QuerySet[TransportOrder]:
     """Orders for the API, newest first, narrowed by the validated `filters` of the list call."""
     orders = TransportOrder.objects.select_related(
-        "source", "destination", "vehicle"
-    ).prefetch_related("events")
+        "source", "destination", "vehicle", "intended_vehicle", "vehicle_type", "sequence"
+    ).prefetch_related(
+        "events", Prefetch("steps", queryset=OrderStep.objects.select_related("station"))
+    )
     exact = {
         "status": "status",
         "source": "source__station_id",

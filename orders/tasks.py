@@ -22,10 +22,11 @@ def dispatch_pending_orders_task() -> int:
 
 @shared_task(name="orders.tasks.reconcile_assignments", ignore_result=True)
 def reconcile_assignments_task() -> int:
-    """Requeue orders assigned longer than the lease that control never sent."""
+    """Requeue orders assigned longer than the lease that control never sent, and apply the
+    lost-vehicle policy to the orders of vehicles that are gone."""
     from orders import services
 
-    return len(services.reconcile_stale_assignments())
+    return len(services.reconcile_stale_assignments()) + len(services.handle_lost_vehicles())
 
 
 # A hard cap well above one attempt (timeouts are per connect and per read), so an endpoint
@@ -56,7 +57,16 @@ def prune_task() -> int:
     return services.prune_idempotency_keys() + services.prune_webhook_deliveries()
 
 
+@shared_task(name="orders.tasks.create_recurring_orders", ignore_result=True)
+def create_recurring_orders_task() -> int:
+    """Create the orders of recurring schedules whose slot is due (once per slot)."""
+    from orders import services
+
+    return len(services.create_due_recurring_orders())
+
+
 PERIODIC = {
+    "orders-create-recurring": (30.0, "orders.tasks.create_recurring_orders"),
     "orders-reconcile-assignments": (30.0, "orders.tasks.reconcile_assignments"),
     "orders-deliver-due-webhooks": (10.0, "orders.tasks.deliver_due_webhooks"),
     "orders-prune": (3600.0, "orders.tasks.prune"),

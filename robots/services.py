@@ -62,10 +62,14 @@ def register_vehicles(*, identities: Iterable[tuple[str, str]]) -> dict[tuple[st
 
 @transaction.atomic
 def save_snapshots(*, snapshots: Sequence[dict[str, Any]]) -> int:
-    """Write live snapshots (dicts with `pk` and SNAPSHOT_FIELDS) in one bulk update."""
+    """Write live snapshots (dicts with `pk` and SNAPSHOT_FIELDS) in one bulk update. Other keys
+    (e.g. `loads_known`) are for the flush's observers and are not stored."""
     if not snapshots:
         return 0
-    vehicles = [Vehicle(**snapshot) for snapshot in snapshots]
+    vehicles = [
+        Vehicle(pk=snapshot["pk"], **{f: snapshot[f] for f in SNAPSHOT_FIELDS if f in snapshot})
+        for snapshot in snapshots
+    ]
     return Vehicle.objects.bulk_update(vehicles, SNAPSHOT_FIELDS, batch_size=500)
 
 

@@ -9,14 +9,17 @@ vehicles misbehave for conformance tests (keys: :data:`simulator.misbehaviour.KE
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import signal
 import sys
 import threading
 from collections.abc import Sequence
+from pathlib import Path
 from types import FrameType
 from urllib.parse import unquote, urlsplit
 
+from simulator.delays import DelayConfig, parse_range
 from simulator.fleet import FleetConfig, SimulatedFleet
 from simulator.layout import LayoutError, load_layout
 from simulator.misbehaviour import KEYS, build_plan
@@ -91,6 +94,19 @@ def build_parser() -> argparse.ArgumentParser:
         help="make one vehicle misbehave (repeatable), e.g. 'AGV-2:drop_orders=1'",
     )
     add(
+        "--delay-share",
+        type=float,
+        default=0.0,
+        help="share of moves started late (0..1), e.g. 0.05; see --delay-range",
+    )
+    add("--delay-range", default="5,30", help="LOW,HIGH simulated seconds of an injected delay")
+    add("--delay-seed", type=int, default=1, help="random seed of the delay injection")
+    add(
+        "--summary",
+        metavar="FILE.json",
+        help="on exit write collisions (footprint overlaps) and injected delays to FILE",
+    )
+    add(
         "--script",
         metavar="FILE.json",
         help='misbehaviour script: [{"serial": "AGV-2", "reject_orders": "orderError"}, ...]',
@@ -112,6 +128,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         host, port, user, password = parse_broker(args.broker)
         layout = load_layout(args.layout)
         misbehaviours = build_plan(args.misbehave, args.script)
+        low, high = parse_range(args.delay_range)
+        delays = DelayConfig(share=args.delay_share, low=low, high=high, seed=args.delay_seed)
     except (ValueError, LayoutError) as exc:
         parser.error(str(exc))
     config = FleetConfig(
@@ -130,6 +148,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         serial_prefix=args.serial_prefix,
         tick_hz=args.tick_hz,
         misbehaviours=misbehaviours,
+        delays=delays,
     )
     try:
         fleet = SimulatedFleet(layout, config)
@@ -159,6 +178,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     while not stop.wait(0.5):
         pass
     fleet.stop()
+    summary = fleet.summary()
+    log.info("summary: %s", json.dumps(summary))
+    if args.summary:
+        Path(args.summary).write_text(json.dumps(summary, indent=2))
     return 0
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from vda5050 import Action, action_params, v3
+from vda5050.adapt import RETRIABLE_MARKER, retriable_result
 from vda5050.enums import ActionScope, ActionStatus, BlockingType, ValueDataType
 
 I = ActionScope.INSTANT  # noqa: E741 - short aliases keep the catalogue table readable
@@ -110,6 +111,62 @@ CATALOGUE: dict[str, ActionSpec] = {
             majors=ONLY_V3,
         ),
         ActionSpec(
+            "retry",
+            (I,),
+            ALL_BLOCKING,
+            "Run a RETRIABLE order action again (REFERENCE E.27).",
+            parameters=(_str("actionId", "The RETRIABLE action.", optional=False),),
+            majors=ONLY_V3,
+        ),
+        ActionSpec(
+            "skipRetry",
+            (I,),
+            ALL_BLOCKING,
+            "Give up a RETRIABLE order action: it ends FAILED, the order goes on.",
+            parameters=(_str("actionId", "The RETRIABLE action.", optional=False),),
+            majors=ONLY_V3,
+        ),
+        ActionSpec(
+            "downloadMap",
+            (I,),
+            ALL_BLOCKING,
+            "Download a map version over HTTP (2.1+); stored DISABLED.",
+            parameters=(
+                _str("mapId", "Map to download.", optional=False),
+                _str("mapVersion", "Version to download.", optional=False),
+                _str("mapDownloadLink", "http(s) URL of the file.", optional=False),
+                _str("mapHash", "SHA-256 hex digest of the file."),
+            ),
+        ),
+        ActionSpec(
+            "enableMap",
+            (I,),
+            ALL_BLOCKING,
+            "Enable a stored map version (2.1+), disabling the map's others.",
+            parameters=(
+                _str("mapId", "Map to enable.", optional=False),
+                _str("mapVersion", "Version to enable.", optional=False),
+            ),
+        ),
+        ActionSpec(
+            "deleteMap",
+            (I,),
+            ALL_BLOCKING,
+            "Delete a stored, disabled map version (2.1+).",
+            parameters=(
+                _str("mapId", "Map to delete.", optional=False),
+                _str("mapVersion", "Version to delete.", optional=False),
+            ),
+        ),
+        ActionSpec(
+            "enableZoneSet",
+            (I,),
+            ALL_BLOCKING,
+            "Enable a zone set received on the zoneSet topic (one per map).",
+            parameters=(_str("zoneSetId", "Zone set to enable.", optional=False),),
+            majors=ONLY_V3,
+        ),
+        ActionSpec(
             "clearInstantActions",
             (I,),
             ALL_BLOCKING,
@@ -166,6 +223,18 @@ class ActionRun:
     def active(self) -> bool:
         """True while INITIALIZING or RUNNING."""
         return self.status in (ActionStatus.INITIALIZING, ActionStatus.RUNNING)
+
+    @property
+    def retriable(self) -> bool:
+        """3.0: failed but waiting for retry/skipRetry (RETRIABLE, carried as marked PAUSED)."""
+        return self.status is ActionStatus.PAUSED and (self.result or "").startswith(
+            RETRIABLE_MARKER
+        )
+
+    def hold_for_retry(self, reason: str) -> None:
+        """3.0 E.27: a `retriable` order action that failed waits for the master."""
+        self.status = ActionStatus.PAUSED
+        self.result = retriable_result(reason)
 
     def fail(self, reason: str) -> None:
         """Mark the action FAILED with a human-readable reason."""

@@ -14,7 +14,10 @@ logReport are executed; every other instant action fails (REFERENCE §3 I.40).
 3.0 differences: instant actions keep their states across new orders until
 ``clearInstantActions`` (REFERENCE §3 E.28), must use blockingType NONE and, if they cannot
 be executed, also raise an INVALID_INSTANT_ACTION warning; ``cancelOrder`` may name the
-``orderId`` to cancel (a different one fails with NO_ORDER_TO_CANCEL).
+``orderId`` to cancel (a different one fails with NO_ORDER_TO_CANCEL). A failing order
+action sent ``retriable`` enters RETRIABLE (REFERENCE §3 E.27; the 2.x model carries it as a
+marked PAUSED) and keeps its place, and blocking, until the master's ``retry`` (run it again)
+or ``skipRetry`` (FAILED, the order goes on); cancelOrder fails it like a WAITING one.
 """
 
 from __future__ import annotations
@@ -24,8 +27,10 @@ import math
 from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
+from simulator import messages
 from simulator.actions import CATALOGUE, ActionRun, check_action
 from simulator.intake import ORDER_MODES
+from simulator.maps import MAP_ACTIONS
 from vda5050 import Action, Load, ParameterValue, action_params
 from vda5050.enums import ActionScope, ActionStatus, BlockingType
 
@@ -147,7 +152,7 @@ class ActionExecutor:
                 run.remaining -= sim_dt
                 if run.remaining <= 0.0:
                     self._finish(run)
-            if run.active:
+            if run.active or run.retriable:  # a RETRIABLE action still holds its place
                 any_active = True
                 exclusive_active = exclusive_active or exclusive
         self._queue = [run for run in self._queue if not run.terminal]
@@ -156,6 +161,8 @@ class ActionExecutor:
         failure = self._effect(run.action)
         if failure is None:
             run.status = ActionStatus.FINISHED
+        elif run.node_key is not None and getattr(run.action, "retriable", False):
+            run.hold_for_retry(failure)  # 3.0 only: 2.x actions never carry the flag
         else:
             run.fail(failure)
         self._vehicle.mark_state_due()
@@ -210,6 +217,12 @@ class ActionExecutor:
         elif kind == "logReport":
             reason = action_params(action).get("reason")
             log.info("%s: logReport: %s", vehicle.config.serial_number, reason)
+        elif kind in {"retry", "skipRetry"}:
+            problem = self._retry(kind, action_params(action).get("actionId"))
+            if problem is not None:
+                run.fail(problem)
+                vehicle.add_invalid_instant_action(action.action_id, problem)
+                return
         elif kind == "clearInstantActions":
             self._runs = {
                 k: r for k, r in self._runs.items() if r.node_key is not None or not r.terminal
@@ -223,6 +236,17 @@ class ActionExecutor:
                 run.fail(failure)
                 return
         run.status = ActionStatus.FINISHED
+
+    def _retry(self, kind: str, action_id: object) -> str | None:
+        """retry runs a RETRIABLE action again, skipRetry fails it; the problem, if any."""
+        target = self._runs.get(action_id) if isinstance(action_id, str) else None
+        if target is None or not target.retriable:
+            return f"{kind}: action {action_id!r} is not RETRIABLE"
+        if kind == "retry":
+            target.status, target.result = ActionStatus.INITIALIZING, None
+        else:
+            target.fail((target.result or "").removeprefix("RETRIABLE: ") or "retry skipped")
+        return None
 
     def _trim_instant_states(self) -> None:
         """3.0: keep at most INSTANT_STATES_MAX instant action states (oldest finished go)."""
@@ -243,7 +267,8 @@ class ActionExecutor:
             vehicle.add_no_order_to_cancel(run.action_id)
             return
         for other in self._runs.values():
-            if other.node_key is not None and other.status is ActionStatus.WAITING:
+            waiting = other.status is ActionStatus.WAITING or other.retriable
+            if other.node_key is not None and waiting:
                 other.fail("order cancelled")
         self._queue = [r for r in self._queue if not r.terminal]
         vehicle.cancel_order()
@@ -288,6 +313,12 @@ class ActionExecutor:
             return self._init_position(params)
         elif kind == "detectObject":
             pass  # nothing to detect in a simulation; it just takes its time
+        elif kind in MAP_ACTIONS:
+            if kind != "enableZoneSet" and not messages.is_v21(vehicle.config.version):
+                return f"{kind} needs protocol 2.1 or later"
+            failure = vehicle.map_store.apply(kind, params)
+            if failure is not None:
+                return failure
         else:
             return f"actionType {kind!r} has no effect in the simulator"
         vehicle.mark_state_due()

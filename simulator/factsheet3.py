@@ -102,7 +102,7 @@ def build_factsheet3(
             maximum_load_mass=MAX_LOAD_KG,
             localization_types=[LocalizationType.NATURAL],
             navigation_types=[v3.NavigationType.FREELY_NAVIGATING],
-            supported_zones=[],
+            supported_zones=[v3.ZoneType.BLOCKED, v3.ZoneType.SPEED_LIMIT, v3.ZoneType.RELEASE],
         ),
         physical_parameters=v3.PhysicalParameters(
             minimum_speed=0.0,

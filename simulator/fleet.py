@@ -25,6 +25,9 @@ from dataclasses import dataclass, field, replace
 from types import TracebackType
 from typing import Any
 
+from simulator.collisions import Body, CollisionChecker, Footprint
+from simulator.delays import DelayConfig, DelayInjector
+from simulator.factsheet import build_factsheet
 from simulator.layout import Layout
 from simulator.misbehaviour import Misbehaviour
 from simulator.mqtt import KEEPALIVE_SECONDS, BrokerSettings, VehicleLink
@@ -55,6 +58,8 @@ class FleetConfig:
     keepalive: int = KEEPALIVE_SECONDS
     misbehaviours: Mapping[str, Misbehaviour] = field(default_factory=dict)
     """Scripted misbehaviour by serial number (``--misbehave`` / ``--script``)."""
+    delays: DelayConfig = DelayConfig()
+    """A share of moves delayed by a random time (``--delay-share``, ``--delay-range``)."""
 
     def serial(self, index: int) -> str:
         """Serial number of vehicle ``index`` (0-based): prefix + 1-based number."""
@@ -78,8 +83,27 @@ def build_vehicles(layout: Layout, config: FleetConfig) -> list[VirtualVehicle]:
             visualization_hz=config.visualization_hz,
             misbehaviour=config.misbehaviours.get(config.serial(i), Misbehaviour()),
         )
-        vehicles.append(VirtualVehicle(vehicle_config, start, known_nodes=known))
+        vehicle = VirtualVehicle(vehicle_config, start, known_nodes=known)
+        if config.delays.share > 0:
+            vehicle.delays = DelayInjector(config.delays, stream=i)
+        vehicles.append(vehicle)
     return vehicles
+
+
+def footprint_of(vehicle: VirtualVehicle) -> Footprint:
+    """The rectangle a vehicle's factsheet declares (physicalParameters length × width)."""
+    physical = build_factsheet(
+        header_id=0,
+        timestamp="",
+        version=vehicle.config.version,
+        manufacturer=vehicle.config.manufacturer,
+        serial_number=vehicle.config.serial_number,
+        speed_max=vehicle.config.speed,
+        state_interval=vehicle.config.state_interval,
+        visualization_hz=vehicle.config.visualization_hz,
+        with_vehicle_config=False,
+    ).physical_parameters
+    return Footprint(physical.length, physical.width)
 
 
 class SimulatedFleet:
@@ -108,6 +132,9 @@ class SimulatedFleet:
         self._by_serial = {link.vehicle.config.serial_number: link for link in self.links}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        # Independent of control: footprints from the vehicles' own factsheets, every step.
+        self.collisions = CollisionChecker()
+        self._footprints = [footprint_of(link.vehicle) for link in self.links]
 
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> None:
@@ -167,6 +194,29 @@ class SimulatedFleet:
                     link.pump(dt, now)
                 except Exception:
                     log.exception("tick failed for %s", link.vehicle.config.serial_number)
+            try:
+                self.check_collisions()
+            except Exception:  # the check must never stop the simulation
+                log.exception("collision check failed")
+
+    def check_collisions(self) -> int:
+        """Check every vehicle's footprint against all others now; returns new collisions."""
+        bodies = []
+        for link, footprint in zip(self.links, self._footprints, strict=True):
+            v = link.vehicle
+            bodies.append(Body(v.config.serial_number, v.x, v.y, v.theta, footprint))
+        sim_time = max(link.vehicle.sim_time for link in self.links)
+        return len(self.collisions.check(bodies, sim_time))
+
+    def summary(self) -> dict[str, object]:
+        """What the run saw: collisions (must be 0) and injected delays."""
+        delays = [link.vehicle.delays for link in self.links if link.vehicle.delays is not None]
+        return {
+            "vehicles": len(self.links),
+            **self.collisions.summary(),
+            "delays_injected": sum(d.injected for d in delays),
+            "delay_seconds": round(sum(d.delayed_seconds for d in delays), 1),
+        }
 
     # ------------------------------------------------------------------ access and faults
     @property

@@ -16,7 +16,6 @@ from vda5050 import (
     EdgeState,
     Error,
     Factsheet,
-    MapState,
     NodeState,
     SafetyState,
     State,
@@ -27,7 +26,6 @@ from vda5050.enums import (
     ConnectionState,
     ErrorLevel,
     EStop,
-    MapStatus,
     TopicKind,
 )
 from vda5050.headers import HeaderFields
@@ -91,14 +89,7 @@ def state_message(vehicle: VirtualVehicle) -> State:
     )
     return State(
         **_header(vehicle, TopicKind.STATE),
-        maps=(
-            [
-                MapState(map_id=m, map_version=cfg.map_version, map_status=MapStatus.ENABLED)
-                for m in sorted(vehicle.maps)
-            ]
-            if is_v21(cfg.version)
-            else None
-        ),
+        maps=vehicle.map_store.states() if is_v21(cfg.version) else None,
         order_id=vehicle.order_id,
         order_update_id=vehicle.order_update_id,
         last_node_id=vehicle.last_node_id,

@@ -59,7 +59,8 @@ class Misbehaviour:
     mode_for: float | None = None
     """Return to the previous mode after this long; None = stay in ``mode``."""
     fail_actions: tuple[str, ...] = ()
-    """Action types (``pick``, ``drop``, ...) that end FAILED with an ``actionFailed`` error."""
+    """Action types (``pick``, ``drop``, ...) that end FAILED with an ``actionFailed`` error
+    (3.0, if sent ``retriable``: RETRIABLE until the master's retry or skipRetry)."""
     fail_count: int | None = None
     """How many such actions fail; None = every one."""
     fatal_after_nodes: int | None = None

@@ -25,7 +25,16 @@ from paho.mqtt.reasoncodes import ReasonCode
 
 from simulator import wire
 from simulator.vehicle import VirtualVehicle
-from vda5050 import DecodeError, InstantActions, Order, Topic, encode, major_version_of
+from vda5050 import (
+    DecodeError,
+    InstantActions,
+    Order,
+    Topic,
+    decode,
+    encode,
+    major_version_of,
+    v3,
+)
 from vda5050.enums import ConnectionState, TopicKind
 
 log = logging.getLogger(__name__)
@@ -91,6 +100,9 @@ class VehicleLink:
             self.topic(TopicKind.ORDER): TopicKind.ORDER,
             self.topic(TopicKind.INSTANT_ACTIONS): TopicKind.INSTANT_ACTIONS,
         }
+        if cfg.major >= 3:  # 3.0 zone sets (REFERENCE L.48), stored by simulator.maps
+            self._inbound[self.topic(TopicKind.ZONE_SET)] = TopicKind.ZONE_SET
+            self._inbound[self.topic(TopicKind.RESPONSES)] = TopicKind.RESPONSES
         self._last_state = float("-inf")
         self._last_visualization = float("-inf")
         self.client = mqtt.Client(
@@ -209,6 +221,9 @@ class VehicleLink:
         if kind is None:
             return
         serial = self.vehicle.config.serial_number
+        if kind in (TopicKind.ZONE_SET, TopicKind.RESPONSES):
+            self._on_zones(kind, bytes(msg.payload))
+            return
         try:
             message = wire.decode_inbound(kind, msg.payload, self._version)
         except DecodeError as exc:
@@ -230,6 +245,21 @@ class VehicleLink:
                 )
             elif isinstance(message, InstantActions):
                 self.vehicle.on_instant_actions(message)
+        self.flush()
+
+    def _on_zones(self, kind: TopicKind, payload: bytes) -> None:
+        """3.0 zoneSet and responses (REFERENCE L.48-49), kept by simulator.maps."""
+        try:
+            message = decode(kind, payload, version=self._version)
+        except DecodeError as exc:
+            log.warning("%s: undecodable %s: %s", self.vehicle.config.serial_number, kind, exc)
+            return
+        with self.lock:
+            if isinstance(message, v3.ZoneSet):
+                self.vehicle.map_store.receive_zone_set(message.zone_set)
+            elif isinstance(message, v3.Responses):
+                self.vehicle.zone_requests.on_responses(message.responses)
+            self.vehicle.mark_state_due()
         self.flush()
 
     # ------------------------------------------------------------------ publishing

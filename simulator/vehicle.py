@@ -13,7 +13,9 @@ import math
 
 from simulator import intake, messages, wire
 from simulator.config import StartPose, VehicleConfig, normalize_angle
+from simulator.delays import DelayInjector
 from simulator.execution import ActionExecutor
+from simulator.maps import MapStore, ZoneRequests
 from simulator.misbehaviour import Misbehaviour
 from simulator.orders import Point, Step
 from simulator.saboteur import Saboteur
@@ -52,7 +54,8 @@ class VirtualVehicle:
         known_nodes: dict[str, Point] | None = None,
     ) -> None:
         self.config = config
-        self.maps = frozenset({start.map_id})
+        self.map_store = MapStore.booted(start.map_id, config.map_version)  # 2.1+: state.maps
+        self.zone_requests = ZoneRequests()  # 3.0: access requests for RELEASE zones
         self.known_nodes = dict(known_nodes or {})
         self.headers = HeaderCounter()
         self.map_id = start.map_id
@@ -82,6 +85,7 @@ class VirtualVehicle:
         self._state_due = True
         self.factsheet_due = True
         self.saboteur = Saboteur(self, config.misbehaviour)
+        self.delays: DelayInjector | None = None  # delay injection (simulator.delays)
 
     # ------------------------------------------------------------------ events
     def mark_state_due(self) -> None:
@@ -99,6 +103,11 @@ class VirtualVehicle:
         return due
 
     # ------------------------------------------------------------------ queries
+    @property
+    def maps(self) -> frozenset[str]:
+        """Ids of the maps the vehicle holds (any version)."""
+        return self.map_store.map_ids()
+
     @property
     def has_order(self) -> bool:
         """True while nodes/edges are pending or order actions are not terminal."""
@@ -274,7 +283,19 @@ class VirtualVehicle:
             and not self.actions.blocks_driving
             and self.battery > 0.0
             and self.fatal_stop is None
+            and self._zones_allow()
         )
+
+    def _zones_allow(self) -> bool:
+        """3.0: a RELEASE zone ahead needs fleet control's grant first (simulator.maps)."""
+        if self.config.major < 3:
+            return True
+        allowed, changed = self.zone_requests.may_drive(
+            self.map_store, self.position, self.pending[0].target
+        )
+        if changed:
+            self.mark_state_due()
+        return allowed
 
     def _stop_fatally(self) -> None:
         error = Error(
@@ -289,7 +310,11 @@ class VirtualVehicle:
 
     def _drive(self, sim_dt: float) -> float:
         """Move towards the next node; returns metres driven."""
-        if not self._can_drive():
+        if not self._can_drive() or (
+            self.delays is not None
+            and self.pending[0].edge is not None  # a move along an edge, not the start node
+            and self.delays.holds((self.order_id, self.pending[0].key), self.sim_time)
+        ):
             self.driving, self.speed_now = False, 0.0
             return 0.0
         if self.charging:

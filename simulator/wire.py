@@ -86,6 +86,8 @@ def states(vehicle: VirtualVehicle) -> list[State] | list[v3.State]:
 def state3(vehicle: VirtualVehicle, state: State) -> v3.State:
     """``state`` (built by :func:`simulator.messages.state_message`) in 3.0 shape."""
     result = adapt.state_v2_to_v3(state, instant_action_ids=vehicle.actions.instant_ids)
+    result.zone_sets = vehicle.map_store.zone_set_states() or None  # REFERENCE L.48
+    result.zone_requests = vehicle.zone_requests.states()  # L.49
     pending = vehicle.pending
     if pending and pending[0].edge is None and result.node_states:
         result.node_states = result.node_states[1:]  # the first node is never a nodeState

@@ -6,7 +6,8 @@ Traffic management (issue 6, shared/docs/TRAFFIC.md): the layout as indexed arra
 (`traffic.layout`), footprint conflict sets (`traffic.footprint`), prioritized SIPP
 (`traffic.sipp`) against a reservation table that doubles as the action dependency graph
 (`traffic.reservations`), re-timing after delays (`traffic.timing`) and the `TrafficManager`
-that control calls per order and per state message (`traffic.manager`).
+that control calls per order and per state message (`traffic.manager`, its queries and
+`block`/`restore` in `traffic.queries`).
 """
 
 from traffic.costs import EdgeRule, NodeRule, VehicleProfile

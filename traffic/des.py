@@ -77,8 +77,13 @@ class SimStats:
     moves: int = 0
     delays: int = 0
     waits: list[float] = field(default_factory=list)  # seconds stopped at decision points
-    plan_seconds: list[float] = field(default_factory=list)  # CPU per successful plan call
-    release_seconds: list[float] = field(default_factory=list)  # CPU per progress event
+    plan_seconds: list[float] = field(default_factory=list)  # wall time per successful plan call
+    release_seconds: list[float] = field(default_factory=list)  # wall time per progress event
+    # the same in process CPU time: on a shared, loaded machine wall time also counts waiting
+    # for a core, which says more about the neighbours than about the algorithm
+    plan_cpu_seconds: list[float] = field(default_factory=list)
+    release_cpu_seconds: list[float] = field(default_factory=list)
+    replan_cpu_seconds: list[float] = field(default_factory=list)  # per tick() call
 
 
 class _Car:
@@ -148,7 +153,10 @@ class Simulation:
                 self._check()
                 self._push(self.now + self.config.check_every, CHECK, -1)
             else:
-                self._apply(self.manager.tick(self.now, budget=self.config.replan_budget))
+                cpu = time.process_time()
+                releases = self.manager.tick(self.now, budget=self.config.replan_budget)
+                self.stats.replan_cpu_seconds.append(time.process_time() - cpu)
+                self._apply(releases)
                 self._push(self.now + self.config.tick_every, CHECK, -2)
         self.now = until
         return self.stats
@@ -175,7 +183,7 @@ class Simulation:
     def _try_plan(self, car: _Car) -> None:
         if car.goals is None or car.moving:
             return
-        began = time.perf_counter()
+        began, cpu = time.perf_counter(), time.process_time()
         try:
             plan = self.manager.plan(car.name, car.goals, self.now)
         except NoPlanError:
@@ -183,6 +191,7 @@ class Simulation:
             self._fallback(car)
             return
         self.stats.plan_seconds.append(time.perf_counter() - began)
+        self.stats.plan_cpu_seconds.append(time.process_time() - cpu)
         car.task_plan = True
         self._started(car, plan)
 
@@ -260,9 +269,10 @@ class Simulation:
         car.stalled = False
         passed = v.passed + 1
         self._occupy(car, (v.route[passed],))
-        began = time.perf_counter()
+        began, cpu = time.perf_counter(), time.process_time()
         releases = manager.on_progress(car.name, passed, self.now)
         self.stats.release_seconds.append(time.perf_counter() - began)
+        self.stats.release_cpu_seconds.append(time.process_time() - cpu)
         self._apply(releases)
         if passed == len(v.route) - 1:
             self._route_done(car)

@@ -1,4 +1,4 @@
-"""`python -m bench.traffic [--quick] [--scenario S1|S2|S3] [--hours H] [--seed N]`."""
+"""`python -m bench.traffic [--quick] [--scenario S1|S2|S3] [--hours H] [--instances ...]`."""
 
 import argparse
 from typing import Any
@@ -13,13 +13,15 @@ def main() -> None:
     parser.add_argument("--scenario", choices=["S1", "S2", "S3"], action="append")
     parser.add_argument("--hours", type=float, help="simulated hours for S1/S3")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--instances", nargs="*", default=(), help="S2: LoRR instance names")
     parser.add_argument("--no-write", action="store_true", help="print only")
+    parser.add_argument("--tag", default="", help="results file suffix (a shorter run)")
     args = parser.parse_args()
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
         figures: dict[str, Any]
         if name == "S2":
-            figures = scenarios.s2(quick=args.quick, seed=args.seed)
+            figures = scenarios.s2(quick=args.quick, seed=args.seed, instances=args.instances)
         else:
             runner = scenarios.s1 if name == "S1" else scenarios.s3
             figures = runner(quick=args.quick, seed=args.seed, hours=args.hours)
@@ -28,7 +30,8 @@ def main() -> None:
         for key, value in figures.items():
             print(f"  {key:32} {value}")
         if not args.no_write:
-            path = write(f"traffic_{name.lower()}", figures)
+            suffix = f"_{args.tag}" if args.tag else ""
+            path = write(f"traffic_{name.lower()}{suffix}", figures)
             print(f"  -> {path}")
 
 

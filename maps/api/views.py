@@ -3,7 +3,8 @@ LIF import and export, validation, edge speed limits after zones."""
 
 from typing import Any
 
-from drf_spectacular.utils import extend_schema
+from drf_spectacular.types import OpenApiTypes
+from drf_spectacular.utils import OpenApiParameter, extend_schema
 from rest_framework import status, viewsets
 from rest_framework.decorators import action
 from rest_framework.parsers import JSONParser, MultiPartParser
@@ -151,6 +152,18 @@ class LifImportApi(APIView):
     permission_classes = [IsAdminUser]
     parser_classes = [MultiPartParser, JSONParser]
 
+    @extend_schema(
+        request={
+            "application/json": OpenApiTypes.OBJECT,
+            "multipart/form-data": OpenApiTypes.OBJECT,
+        },
+        parameters=[
+            OpenApiParameter("site", OpenApiTypes.STR, description="site the layout belongs to"),
+            OpenApiParameter("replace", OpenApiTypes.BOOL, description="replace a layout"),
+        ],
+        responses={201: OpenApiTypes.OBJECT, 422: OpenApiTypes.OBJECT},
+        summary="Import a LIF file (staff only)",
+    )
     def post(self, request: Request) -> Response:
         params = LifImportInputSerializer(data={**request.query_params.dict(), **_form(request)})
         params.is_valid(raise_exception=True)

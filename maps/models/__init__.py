@@ -1,7 +1,8 @@
 """Site layouts: sites, floor maps, LIF imports and layouts, vehicle types, the graph, stations,
-zones, and the versions the layout editor saves."""
+zones, the versions the layout editor saves, and released map files."""
 
 from maps.models.graph import Edge, EdgeProperty, Node, NodeProperty, VehicleType
+from maps.models.releases import MapRelease
 from maps.models.sites import Layout, LifImport, Map, Site, floor_plan_storage
 from maps.models.stations import Station, StationNode
 from maps.models.versions import MapVersion
@@ -13,6 +14,7 @@ __all__ = [
     "Layout",
     "LifImport",
     "Map",
+    "MapRelease",
     "MapVersion",
     "Node",
     "NodeProperty",

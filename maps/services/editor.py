@@ -15,6 +15,7 @@ from django.contrib.auth.models import AnonymousUser, User
 from django.db import transaction
 from django.db.models import F, ProtectedError, Q
 
+from fleet import audit
 from fleet.exceptions import DomainError, InvalidRequestError
 from maps.models import Edge, Map, MapVersion, Node, Station, StationNode, VehicleType, Zone
 from maps.selectors.editor import transition_edge_ids
@@ -74,6 +75,12 @@ def save_layout_version(
             layout=draft.as_dict(),
         )
         Map.objects.filter(pk=locked.pk).update(version=version.number)
+        audit.record(
+            "layout.save",
+            target_type="map",
+            target_id=locked.map_id,
+            detail={"version": version.number, "counts": version.counts, "note": draft.note},
+        )
     map.refresh_from_db()
     return version
 

@@ -7,6 +7,7 @@ from typing import Any
 from django.db import transaction
 from django.db.models import ProtectedError
 
+from fleet import audit
 from maps.lif import ids
 from maps.lif.document import LifDocument, LifNode, LifStation
 from maps.lif.parse import parse_lif
@@ -59,6 +60,12 @@ def import_lif(
             _write(document, report, site_id=site_id, replace=replace, file_name=file_name)
             if report.errors:
                 raise _Rollback
+            audit.record(
+                "layout.import",
+                target_type="site",
+                target_id=site_id,
+                detail={"file": file_name, "maps": report.maps, "replace": replace},
+            )
     except _Rollback:
         report.maps, report.counts, report.import_pk = [], {}, None
     return report

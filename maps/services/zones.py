@@ -5,6 +5,7 @@ from typing import Any
 
 from django.db import transaction
 
+from fleet import audit
 from fleet.exceptions import InvalidRequestError
 from maps.geometry import Polygon
 from maps.models import Map, VehicleType, Zone
@@ -60,6 +61,9 @@ def create_zone(*, map: Map, vehicle_types: Iterable[VehicleType] = (), **fields
     zone.save()
     zone.vehicle_types.set(vehicle_types)
     mark_layout_changed(maps=[map])
+    audit.record(
+        "zone.create", target_type="zone", target_id=zone.zone_id, detail={"map": map.map_id}
+    )
     return zone
 
 
@@ -82,15 +86,24 @@ def update_zone(
     if vehicle_types is not None:
         zone.vehicle_types.set(vehicle_types)
     mark_layout_changed(maps=[zone.map])
+    audit.record(
+        "zone.change",
+        target_type="zone",
+        target_id=zone.zone_id,
+        detail={"fields": sorted(changes)},
+    )
     return zone
 
 
 @transaction.atomic
 def delete_zone(*, zone: Zone) -> None:
     """Delete `zone`; routing forgets it."""
-    layout = zone.map
+    layout, zone_id = zone.map, zone.zone_id
     zone.delete()
     mark_layout_changed(maps=[layout])
+    audit.record(
+        "zone.delete", target_type="zone", target_id=zone_id, detail={"map": layout.map_id}
+    )
 
 
 @transaction.atomic
@@ -101,6 +114,10 @@ def set_zones_enabled(*, zones: Iterable[Zone], enabled: bool) -> int:
         zone.enabled = enabled
     Zone.objects.bulk_update(changed, ["enabled"])
     mark_layout_changed(maps={z.map for z in changed})
+    for zone in changed:
+        audit.record(
+            "zone.enable" if enabled else "zone.disable", target_type="zone", target_id=zone.zone_id
+        )
     return len(changed)
 
 

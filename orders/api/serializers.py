@@ -6,13 +6,30 @@ from typing import Any
 from drf_spectacular.utils import extend_schema_field
 from rest_framework import serializers
 
-from orders.models import OrderEvent, TransportOrder, VehicleCommand, WebhookSubscription
+from orders.models import (
+    OrderEvent,
+    OrderStep,
+    TransportOrder,
+    VehicleCommand,
+    WebhookSubscription,
+)
 
 
 class OrderEventSerializer(serializers.ModelSerializer[OrderEvent]):
     class Meta:
         model = OrderEvent
         fields = ["kind", "at", "detail"]
+
+
+class OrderStepSerializer(serializers.ModelSerializer[OrderStep]):
+    """One stop: station id, operation, the custom action type and parameters, when it was done."""
+
+    station = serializers.CharField(source="station.station_id", read_only=True)
+
+    class Meta:
+        model = OrderStep
+        fields = ["index", "station", "operation", "action_type", "parameters", "finished_at"]
+        read_only_fields = fields
 
 
 class TransportOrderSerializer(serializers.ModelSerializer[TransportOrder]):
@@ -25,6 +42,17 @@ class TransportOrderSerializer(serializers.ModelSerializer[TransportOrder]):
         source="vehicle.serial_number", default=None, read_only=True, allow_null=True
     )
     vehicle_id = serializers.IntegerField(read_only=True, allow_null=True)
+    intended_vehicle = serializers.CharField(
+        source="intended_vehicle.serial_number", default=None, read_only=True, allow_null=True
+    )
+    vehicle_type = serializers.CharField(
+        source="vehicle_type.type_id", default=None, read_only=True, allow_null=True
+    )
+    steps = OrderStepSerializer(many=True, read_only=True)
+    sequence = serializers.CharField(
+        source="sequence.reference", default=None, read_only=True, allow_null=True
+    )
+    sequence_index = serializers.IntegerField(read_only=True, allow_null=True)
     events = OrderEventSerializer(many=True, read_only=True)
 
     class Meta:
@@ -34,6 +62,12 @@ class TransportOrderSerializer(serializers.ModelSerializer[TransportOrder]):
             "source",
             "destination",
             "map",
+            "steps",
+            "intended_vehicle",
+            "vehicle_type",
+            "metadata",
+            "sequence",
+            "sequence_index",
             "load_id",
             "load_type",
             "priority",
@@ -45,6 +79,7 @@ class TransportOrderSerializer(serializers.ModelSerializer[TransportOrder]):
             "vehicle",
             "vehicle_id",
             "route",
+            "route_steps",
             "failure_reason",
             "cancel_requested",
             "created_at",

@@ -15,11 +15,12 @@ from rest_framework.request import Request
 from rest_framework.response import Response
 from rest_framework.views import APIView
 
-from maps.models import Station
+from maps.models import Station, VehicleType
 from orders import selectors, services
 from orders.api import idempotency
-from orders.api.serializers import TransportOrderSerializer
-from orders.models import TransportOrder
+from orders.api.serializers import TransportOrderSerializer, validate_json_parameters
+from orders.models import OrderStep, TransportOrder
+from robots.models import Vehicle
 
 CONFLICT = OpenApiResponse(description="Not allowed in the order's current state (`detail`).")
 UNPROCESSABLE = OpenApiResponse(description="Well-formed but cannot be carried out (`detail`).")
@@ -30,6 +31,39 @@ class UpperCaseChoiceField(serializers.ChoiceField):
 
     def to_internal_value(self, data: Any) -> Any:
         return super().to_internal_value(str(data).upper())
+
+
+def _vehicle(serial_number: str) -> Vehicle:
+    found = list(Vehicle.objects.filter(serial_number=serial_number)[:2])
+    if len(found) != 1:
+        problem = "No vehicle" if not found else "Several vehicles have serial number"
+        raise serializers.ValidationError({"intended_vehicle": [f"{problem} {serial_number!r}."]})
+    return found[0]
+
+
+def _vehicle_type(type_id: str) -> VehicleType:
+    try:
+        return VehicleType.objects.get(type_id=type_id)
+    except VehicleType.DoesNotExist:
+        raise serializers.ValidationError(
+            {"vehicle_type": [f"No vehicle type {type_id!r}."]}
+        ) from None
+
+
+class StepInputSerializer(serializers.Serializer[dict[str, Any]]):
+    """One stop of a multi-stop order."""
+
+    station = serializers.CharField(max_length=100, help_text="station id")
+    operation = UpperCaseChoiceField(choices=OrderStep.Operation.choices)
+    action_type = serializers.CharField(
+        max_length=100, required=False, help_text="VDA 5050 action type, for operation ACTION"
+    )
+    parameters = serializers.JSONField(
+        required=False, help_text="action parameters as an object of key: value"
+    )
+
+    def validate_parameters(self, value: Any) -> Any:
+        return validate_json_parameters(value)
 
 
 class TransportOrderListCreateApi(generics.ListAPIView[TransportOrder]):
@@ -55,9 +89,32 @@ class TransportOrderListCreateApi(generics.ListAPIView[TransportOrder]):
     @extend_schema_serializer(component_name="OrderCreate")
     class InputSerializer(serializers.Serializer[dict[str, Any]]):
         source = serializers.CharField(  # type: ignore[assignment]
-            max_length=100, help_text="station id of the pickup"
+            max_length=100,
+            required=False,
+            help_text="station id of the pickup (a pick → drop order; or give `steps`)",
         )
-        destination = serializers.CharField(max_length=100, help_text="station id of the drop")
+        destination = serializers.CharField(
+            max_length=100, required=False, help_text="station id of the drop"
+        )
+        steps = StepInputSerializer(
+            many=True,
+            required=False,
+            help_text="the stops in order (instead of source and destination)",
+        )
+        intended_vehicle = serializers.CharField(
+            max_length=100, required=False, help_text="serial number of the only vehicle allowed"
+        )
+        vehicle_type = serializers.CharField(
+            max_length=100, required=False, help_text="layout vehicle type id the vehicle must have"
+        )
+        metadata = serializers.JSONField(
+            required=False, help_text="free JSON object, stored and returned as given"
+        )
+        sequence = serializers.CharField(
+            max_length=100,
+            required=False,
+            help_text="reference of an order sequence: its orders are done in turn by one vehicle",
+        )
         map = serializers.CharField(
             max_length=100, required=False, help_text="map id; needed when station ids repeat"
         )
@@ -67,6 +124,25 @@ class TransportOrderListCreateApi(generics.ListAPIView[TransportOrder]):
         external_ref = serializers.CharField(default="", allow_blank=True, max_length=200)
         earliest_start = serializers.DateTimeField(required=False, allow_null=True)
         deadline = serializers.DateTimeField(required=False, allow_null=True)
+
+        def validate_metadata(self, value: Any) -> Any:
+            return validate_json_parameters(value)
+
+        def validate(self, attrs: dict[str, Any]) -> dict[str, Any]:
+            if "steps" in attrs:
+                if "source" in attrs or "destination" in attrs:
+                    raise serializers.ValidationError(
+                        {"steps": ["Give steps or source and destination, not both."]}
+                    )
+                if not attrs["steps"]:
+                    raise serializers.ValidationError({"steps": ["At least one step."]})
+            else:
+                missing = [f for f in ("source", "destination") if f not in attrs]
+                if missing:
+                    raise serializers.ValidationError(
+                        {f: ["This field is required (or give steps)."] for f in missing}
+                    )
+            return attrs
 
     @extend_schema(parameters=[FilterSerializer])
     def get(self, request: Request, *args: Any, **kwargs: Any) -> Response:
@@ -92,7 +168,25 @@ class TransportOrderListCreateApi(generics.ListAPIView[TransportOrder]):
                     "priority": 5,
                     "deadline": "2030-01-01T10:30:00Z",
                 },
-            )
+            ),
+            OpenApiExample(
+                "Multi-stop: pick, a custom action, then two drops",
+                request_only=True,
+                value={
+                    "steps": [
+                        {"station": "PICK-1", "operation": "PICK"},
+                        {
+                            "station": "PICK-2",
+                            "operation": "ACTION",
+                            "action_type": "detectObject",
+                            "parameters": {"objectType": "pallet"},
+                        },
+                        {"station": "DROP-1", "operation": "DROP"},
+                    ],
+                    "vehicle_type": "sim.SimCarrier",
+                    "external_ref": "SO-2026-1188",
+                },
+            ),
         ],
         responses={
             201: TransportOrderSerializer,
@@ -108,8 +202,23 @@ class TransportOrderListCreateApi(generics.ListAPIView[TransportOrder]):
         data.is_valid(raise_exception=True)
         fields = dict(data.validated_data)
         map_id = fields.pop("map", None)
-        fields["source"] = _station("source", fields["source"], map_id)
-        fields["destination"] = _station("destination", fields["destination"], map_id)
+        if "steps" in fields:
+            fields["steps"] = [
+                services.StepSpec(
+                    station=_station(f"steps[{i}].station", step["station"], map_id),
+                    operation=step["operation"],
+                    action_type=step.get("action_type", ""),
+                    parameters=step.get("parameters", {}),
+                )
+                for i, step in enumerate(fields["steps"])
+            ]
+        else:
+            fields["source"] = _station("source", fields["source"], map_id)
+            fields["destination"] = _station("destination", fields["destination"], map_id)
+        if "intended_vehicle" in fields:
+            fields["intended_vehicle"] = _vehicle(fields["intended_vehicle"])
+        if "vehicle_type" in fields:
+            fields["vehicle_type"] = _vehicle_type(fields["vehicle_type"])
         order = services.create_transport_order(created_by=request.user, **fields)
         return Response(TransportOrderSerializer(order).data, status=status.HTTP_201_CREATED)
 
@@ -133,8 +242,8 @@ class TransportOrderDetailApi(generics.RetrieveAPIView[TransportOrder]):
 
     serializer_class = TransportOrderSerializer
     queryset = TransportOrder.objects.select_related(
-        "source__map", "destination", "vehicle"
-    ).prefetch_related("events")
+        "source__map", "destination", "vehicle", "intended_vehicle", "vehicle_type", "sequence"
+    ).prefetch_related("events", "steps__station")
 
 
 class TransportOrderCancelApi(APIView):

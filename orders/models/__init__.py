@@ -2,7 +2,8 @@
 
 from orders.models.commands import VehicleCommand
 from orders.models.integrations import ApiToken, IdempotencyKey, IntegrationClient
-from orders.models.transport import OrderEvent, TransportOrder
+from orders.models.schedules import RecurringOrder, RecurringOrderRun
+from orders.models.transport import OrderEvent, OrderSequence, OrderStep, TransportOrder
 from orders.models.webhooks import WebhookAttempt, WebhookDelivery, WebhookSubscription
 
 __all__ = [
@@ -10,6 +11,10 @@ __all__ = [
     "IdempotencyKey",
     "IntegrationClient",
     "OrderEvent",
+    "OrderSequence",
+    "OrderStep",
+    "RecurringOrder",
+    "RecurringOrderRun",
     "TransportOrder",
     "VehicleCommand",
     "WebhookAttempt",

@@ -19,6 +19,11 @@ EVENT_TYPES = [
     "order.cancel_requested",
     "order.cancelled",
     "vehicle.command_queued",
+    "vehicle.connection_changed",
+    "vehicle.mode_changed",
+    "vehicle.error",
+    "vehicle.order_assigned",
+    "vehicle.order_finished",
     "ping",
 ]
 

@@ -11,17 +11,20 @@ from django.db import IntegrityError, connection, transaction
 from django.db.models import Q
 from django.utils import timezone
 
+from battery import selectors as battery_selectors
 from fleet.control_queue import send_command
 from fleet.realtime import LIVE_GROUP, broadcast_on_commit
-from maps.models import Map
-from maps.selectors import load_graph
-from orders import selectors
+from maintenance import selectors as maintenance_selectors
+from maps.models import Map, VehicleType
+from maps.selectors import load_graph, vehicle_profile
+from orders import capability, selectors
 from orders.assignment import Candidate, Job, plan_batch
 from orders.conf import setting
-from orders.models import OrderEvent, TransportOrder
+from orders.models import OrderEvent, OrderSequence, OrderStep, TransportOrder
 from orders.services.events import dispatch_on_commit, record, transition
+from orders.services.vehicle_events import emit_vehicle_order_event
 from robots.models import Vehicle
-from traffic import NoRouteError, RoutingGraph
+from traffic import NoRouteError, RoutingGraph, VehicleProfile
 
 logger = logging.getLogger(__name__)
 Status = TransportOrder.Status
@@ -32,7 +35,10 @@ def dispatch_pending_orders(*, now: datetime | None = None) -> list[TransportOrd
     """Run one dispatch cycle: assign waiting orders to idle vehicles, note why the rest wait.
 
     Per map, the most urgent orders (as many as there are idle vehicles) are matched to vehicles
-    by `orders.assignment.plan_batch` on routing distance to the pickup. Orders before their
+    by `orders.assignment.plan_batch` on travel time to the first step, priced per vehicle type
+    (speeds, type restrictions) from the routing graph's cached tables. An order takes only its
+    intended vehicle, vehicles of its vehicle type, and vehicles whose factsheet allows its load
+    type and step actions; the note says which of these keeps it waiting. Orders before their
     earliest start wait. Safe to run concurrently: cycles take turns on a PostgreSQL advisory
     lock, an order is claimed with a conditional update, and the database's
     one-active-order-per-vehicle constraint refuses a vehicle that someone else took first.
@@ -44,24 +50,28 @@ def dispatch_pending_orders(*, now: datetime | None = None) -> list[TransportOrd
             return []
         notes: dict[int, str] = {}
         ready = []
+        gate = selectors.get_sequence_gate(orders=pending)
         for order in pending:
             if order.earliest_start and order.earliest_start > now:
                 start = order.earliest_start.isoformat(timespec="seconds")
                 notes[order.pk] = f"waits for its earliest start ({start})"
+            elif order.pk in gate.waiting:
+                notes[order.pk] = gate.waiting[order.pk]
             else:
                 ready.append(order)
-        assigned = _assign_ready(ready, notes, now)
+        assigned = _assign_ready(ready, notes, now, gate)
         _save_notes(pending, notes)
     return assigned
 
 
 def _assign_ready(
-    ready: list[TransportOrder], notes: dict[int, str], now: datetime
+    ready: list[TransportOrder], notes: dict[int, str], now: datetime, gate: selectors.SequenceGate
 ) -> list[TransportOrder]:
     if not ready:
         return []
     hold = timedelta(seconds=float(setting("COMMAND_HOLD")))
     fleet = selectors.get_dispatch_fleet(held_since=now - hold)
+    _hold_back(fleet)  # battery (charging, low) and maintenance (out of service)
     if not fleet.idle:
         notes.update(dict.fromkeys((o.pk for o in ready), _fleet_note(fleet)))
         return []
@@ -80,7 +90,7 @@ def _assign_ready(
                 dict.fromkeys((o.pk for o in orders), f"no idle vehicle on map {layout.map_id}")
             )
             continue
-        assigned += _assign_on_map(layout, orders, vehicles, idle_since, notes, now)
+        assigned += _assign_on_map(layout, orders, vehicles, idle_since, notes, now, gate)
     return assigned
 
 
@@ -91,49 +101,181 @@ def _assign_on_map(
     idle_since: dict[int, datetime],
     notes: dict[int, str],
     now: datetime,
+    gate: selectors.SequenceGate,
 ) -> list[TransportOrder]:
     graph = load_graph(map=layout)
-    jobs = [
-        Job(
-            key=o.pk,
-            pickup=o.source.node.node_id,
-            station=o.source.station_id,
-            priority=o.priority,
-            deadline=o.deadline,
-            created=o.created_at,
+    types = selectors.get_vehicle_types(vehicles=vehicles)
+    factsheets = {v.pk: v.factsheet for v in vehicles}
+    profiles = {
+        pk: capability.with_height(vehicle_profile(vehicle_type=t), factsheets[pk])
+        for pk, t in types.items()
+    }
+    capabilities = _Capabilities(vehicles)
+    jobs = []
+    for order in orders:
+        allowed, note = _allowed_vehicles(order, vehicles, types, gate, capabilities)
+        if note is not None:
+            notes[order.pk] = note
+            continue
+        steps = _steps(order)
+        jobs.append(
+            Job(
+                key=order.pk,
+                pickup=steps[0].station.node.node_id,
+                station=steps[0].station.station_id,
+                priority=order.priority,
+                deadline=order.deadline,
+                created=order.created_at,
+                allowed=allowed,
+            )
         )
-        for o in orders
+    candidates = [
+        Candidate(v.pk, v.last_node_id, idle_since.get(v.pk), profiles.get(v.pk)) for v in vehicles
     ]
-    candidates = [Candidate(v.pk, v.last_node_id, idle_since.get(v.pk)) for v in vehicles]
-    plan = plan_batch(jobs, candidates, graph.distances_to, now=now)
+    plan = plan_batch(
+        jobs,
+        candidates,
+        graph.travel_times_to,
+        now=now,
+        by_profile=lambda goal, profile: _travel_times(graph, goal, profile),  # type: ignore[arg-type]
+    )
     notes.update(plan.notes)
     order_by_pk = {o.pk: o for o in orders}
     vehicle_by_pk = {v.pk: v for v in vehicles}
     assigned = []
     for job, candidate, _ in plan.pairs:
         order, vehicle = order_by_pk[job.key], vehicle_by_pk[candidate.key]
-        route = _route(graph, vehicle, order)
-        if route is None:
-            notes[order.pk] = f"{order.destination.station_id} cannot be reached from the source"
-        elif _assign(order=order, vehicle=vehicle, route=route):
+        planned = _route(graph, vehicle, _steps(order), profiles.get(vehicle.pk))
+        if isinstance(planned, str):
+            notes[order.pk] = planned
+        elif refusal := battery_selectors.job_refusal(
+            vehicle=vehicle, route=planned[0], graph=graph
+        ):
+            notes[order.pk] = f"{vehicle}: {refusal}"
+        elif _assign(order=order, vehicle=vehicle, route=planned[0], route_steps=planned[1]):
             assigned.append(order)
         else:
             notes[order.pk] = "the chosen vehicle was taken meanwhile; next cycle"
     return assigned
 
 
-def _route(graph: RoutingGraph, vehicle: Vehicle, order: TransportOrder) -> list[str] | None:
-    pickup, drop = order.source.node.node_id, order.destination.node.node_id
+def _travel_times(graph: RoutingGraph, goal: str, profile: VehicleProfile) -> dict[str, float]:
+    """Seconds to `goal` for vehicles of `profile`; none when their type may not use the goal
+    (LIF: the node has no property for that type), instead of failing the whole cycle."""
     try:
-        return (
-            graph.shortest_path(vehicle.last_node_id, pickup)
-            + graph.shortest_path(pickup, drop)[1:]
-        )
+        return graph.travel_times_to(goal, vehicle=profile)
     except NoRouteError:
-        return None
+        return {}
 
 
-def _assign(*, order: TransportOrder, vehicle: Vehicle, route: list[str]) -> bool:
+def _steps(order: TransportOrder) -> list[OrderStep]:
+    """The order's steps (prefetched); an order saved without steps is its pick → drop pair."""
+    steps = list(order.steps.all())
+    if steps:
+        return steps
+    cached: list[OrderStep] | None = getattr(order, "_pick_drop", None)
+    if cached is None:
+        cached = [
+            OrderStep(index=0, station=order.source, operation=OrderStep.Operation.PICK),
+            OrderStep(index=1, station=order.destination, operation=OrderStep.Operation.DROP),
+        ]
+        order._pick_drop = cached  # type: ignore[attr-defined]
+    return cached
+
+
+def _allowed_vehicles(
+    order: TransportOrder,
+    vehicles: list[Vehicle],
+    types: dict[int, VehicleType],
+    gate: selectors.SequenceGate,
+    capabilities: "_Capabilities",
+) -> tuple[frozenset[int] | None, str | None]:
+    """The idle vehicles that may take `order` (None: any), or why none may now."""
+    idle = capabilities.idle
+    bound = gate.vehicle_of.get(order.sequence_id) if order.sequence_id else None
+    if bound is not None:
+        if bound not in idle:
+            return None, "waits for the vehicle of its sequence to be free"
+        allowed = {bound}
+    elif order.intended_vehicle_id is not None:
+        if order.intended_vehicle_id not in idle:
+            return None, f"waits for its intended vehicle {order.intended_vehicle} to be free"
+        allowed = {order.intended_vehicle_id}
+    else:
+        allowed = idle
+    # A vehicle bound to a sequence with open orders takes no other work.
+    others = {pk for pk, sequence in gate.reserved.items() if sequence != order.sequence_id}
+    if allowed & others:
+        allowed = allowed - others
+        if not allowed:
+            return None, "the idle vehicles are reserved for order sequences"
+    if order.vehicle_type_id is not None:
+        allowed = {pk for pk in allowed if pk in types and types[pk].pk == order.vehicle_type_id}
+        if not allowed:
+            return None, f"no idle vehicle of type {order.vehicle_type}"
+    actions = frozenset(step.vda_action_type for step in _steps(order))
+    refusals = {
+        pk: reason
+        for pk, reason in capabilities.refusals(order.load_type, actions).items()
+        if pk in allowed
+    }
+    if refusals.keys() == allowed:
+        reason = sorted(set(refusals.values()))[0]
+        return None, f"no idle vehicle can handle {reason}"
+    if refusals or allowed != idle:
+        return frozenset(allowed - refusals.keys()), None
+    return None, None
+
+
+class _Capabilities:
+    """Which vehicles refuse which (load type, step actions), from their factsheets: read once
+    per cycle and cached per distinct question (a backlog asks the same few many times)."""
+
+    def __init__(self, vehicles: list[Vehicle]) -> None:
+        # Only vehicles whose factsheet declares load sets or node actions can refuse anything.
+        self._factsheets = {
+            v.pk: v.factsheet
+            for v in vehicles
+            if capability.load_types(v.factsheet) is not None
+            or capability.node_actions(v.factsheet) is not None
+        }
+        self._cache: dict[tuple[str, frozenset[str]], dict[int, str]] = {}
+        self.idle = {v.pk for v in vehicles}
+
+    def refusals(self, load_type: str, actions: frozenset[str]) -> dict[int, str]:
+        """Vehicle pk -> what it cannot handle."""
+        key = (load_type, actions)
+        found = self._cache.get(key)
+        if found is None:
+            found = {}
+            for pk, factsheet in self._factsheets.items():
+                reason = capability.refusal(factsheet, load_type=load_type, actions=actions)
+                if reason is not None:
+                    found[pk] = reason
+            self._cache[key] = found
+        return found
+
+
+def _route(
+    graph: RoutingGraph, vehicle: Vehicle, steps: list[OrderStep], profile: VehicleProfile | None
+) -> tuple[list[str], list[int]] | str:
+    """The quickest route from the vehicle through every step's node, with each step's index in
+    it; or why there is none."""
+    route, indices = [vehicle.last_node_id], []
+    for number, step in enumerate(steps, start=1):
+        goal = step.station.node.node_id
+        try:
+            leg = graph.route_from_table(route[-1], goal, vehicle=profile).nodes
+        except NoRouteError:
+            return f"step {number} ({step.station.station_id}) cannot be reached by {vehicle}"
+        route += leg[1:]
+        indices.append(len(route) - 1)
+    return route, indices
+
+
+def _assign(
+    *, order: TransportOrder, vehicle: Vehicle, route: list[str], route_steps: list[int]
+) -> bool:
     now = timezone.now()
     try:
         with transaction.atomic():
@@ -143,6 +285,7 @@ def _assign(*, order: TransportOrder, vehicle: Vehicle, route: list[str]) -> boo
                 status=Status.ASSIGNED,
                 vehicle=vehicle,
                 route=route,
+                route_steps=route_steps,
                 assigned_at=now,
                 sent_at=None,
                 vda_order_id=f"TO-{order.pk}",
@@ -151,7 +294,14 @@ def _assign(*, order: TransportOrder, vehicle: Vehicle, route: list[str]) -> boo
             )
             if not claimed:
                 return False
+            if order.sequence_id is not None:  # the sequence's first assignment binds it
+                OrderSequence.objects.filter(pk=order.sequence_id, vehicle__isnull=True).update(
+                    vehicle=vehicle
+                )
             record(order.pk, OrderEvent.Kind.ASSIGNED, vehicle=str(vehicle), route=route)
+            emit_vehicle_order_event(
+                event_type="vehicle.order_assigned", vehicle=vehicle, order_id=order.pk
+            )
             order_id = order.pk
             transaction.on_commit(
                 lambda: send_command("order.assigned", order=order_id), robust=True
@@ -161,7 +311,17 @@ def _assign(*, order: TransportOrder, vehicle: Vehicle, route: list[str]) -> boo
         logger.info("vehicle %s was taken by a concurrent dispatch", vehicle)
         return False
     order.status, order.vehicle, order.route = Status.ASSIGNED, vehicle, route
+    order.route_steps = route_steps
     return True
+
+
+def _hold_back(fleet: selectors.DispatchFleet) -> None:
+    """Move idle vehicles that charge, need charge or are out of service to `unavailable`."""
+    holds = battery_selectors.dispatch_holds(vehicles=fleet.idle)
+    holds |= maintenance_selectors.out_of_service(vehicle_ids=[v.pk for v in fleet.idle])
+    for reason in holds.values():
+        fleet.unavailable[reason.split(" (")[0].split(":")[0]] += 1
+    fleet.idle = [v for v in fleet.idle if v.pk not in holds]
 
 
 def _fleet_note(fleet: selectors.DispatchFleet) -> str:
@@ -207,13 +367,17 @@ def reconcile_stale_assignments(*, now: datetime | None = None) -> list[int]:
     lease = float(setting("ASSIGNMENT_LEASE"))
     requeued = []
     for order in selectors.list_stale_assignments(assigned_before=now - timedelta(seconds=lease)):
-        if _release(order, f"not started within {lease:.0f} s; {order.vehicle} never received it"):
+        if release_assignment(
+            order, f"not started within {lease:.0f} s; {order.vehicle} never received it"
+        ):
             requeued.append(order.pk)
     return requeued
 
 
 @transaction.atomic
-def _release(order: TransportOrder, reason: str) -> bool:
+def release_assignment(order: TransportOrder, reason: str) -> bool:
+    """Give an assigned order its vehicle never received back to dispatch, with the reason;
+    False when it changed meanwhile (sent, started, cancelled or assigned anew)."""
     unchanged = Q(
         vehicle_id=order.vehicle_id,
         assigned_at=order.assigned_at,
@@ -228,7 +392,9 @@ def _release(order: TransportOrder, reason: str) -> bool:
         where=unchanged,
         vehicle=None,
         route=[],
+        route_steps=[],
         assigned_at=None,
+        vehicle_lost_at=None,
         dispatch_note="requeued: " + reason[:180],
     )
     if released:

@@ -1,20 +1,25 @@
 """Writes of transport orders: creation, changes by the ERP, progress from control, cancelling."""
 
 from datetime import datetime
+from typing import Any
 
 from django.contrib.auth.base_user import AbstractBaseUser
 from django.contrib.auth.models import AnonymousUser, User
 from django.db import transaction
+from django.db.models import Q
 from django.utils import timezone
 
+from fleet import audit
 from fleet.control_queue import send_command
 from fleet.exceptions import DomainError, InvalidRequestError
 from fleet.realtime import LIVE_GROUP, broadcast_on_commit
-from maps.models import Station
-from maps.selectors import load_graph
-from orders.models import OrderEvent, TransportOrder
+from maps.models import Station, VehicleType
+from orders.models import OrderEvent, OrderSequence, OrderStep, TransportOrder
+from orders.services import floor
 from orders.services.events import dispatch_on_commit, record, transition, who
-from traffic import NoRouteError
+from orders.services.steps import StepSpec, check_steps, pick_drop, save_steps
+from orders.services.vehicle_events import emit_vehicle_order_event
+from robots.models import Vehicle
 
 Status = TransportOrder.Status
 Kind = OrderEvent.Kind
@@ -23,42 +28,69 @@ Kind = OrderEvent.Kind
 @transaction.atomic
 def create_transport_order(
     *,
-    source: Station,
-    destination: Station,
+    source: Station | None = None,
+    destination: Station | None = None,
+    steps: list[StepSpec] | None = None,
     priority: int = 0,
     load_id: str = "",
     load_type: str = "EPAL",
     external_ref: str = "",
     earliest_start: datetime | None = None,
     deadline: datetime | None = None,
+    intended_vehicle: Vehicle | None = None,
+    vehicle_type: VehicleType | None = None,
+    metadata: dict[str, Any] | None = None,
+    sequence: str = "",
     created_by: AbstractBaseUser | AnonymousUser | None = None,
 ) -> TransportOrder:
     """Queue a new transport order and trigger dispatch once it is committed.
 
-    Both stations must be on the same map, the destination reachable from the source, and a
-    deadline later than the earliest start.
+    Either `steps` (multi-stop) or `source` and `destination` (pick there, drop here). All steps
+    must be on one map, each reachable from the one before (for `vehicle_type` if given), and a
+    deadline later than the earliest start. With `sequence` (the client's reference), the order
+    joins that order sequence (created on first use) as its next order.
     """
-    if source.pk == destination.pk:
-        raise InvalidRequestError("source and destination are the same station")
-    if source.map_id != destination.map_id:
-        raise InvalidRequestError("source and destination are on different maps")
+    if steps is None:
+        if source is None or destination is None:
+            raise InvalidRequestError("give steps, or source and destination")
+        if source.pk == destination.pk:
+            raise InvalidRequestError("source and destination are the same station")
+        if source.map_id != destination.map_id:
+            raise InvalidRequestError("source and destination are on different maps")
+        steps = pick_drop(source, destination)
+    elif source is not None or destination is not None:
+        raise InvalidRequestError("give steps or source and destination, not both")
     _check_window(earliest_start, deadline)
-    try:
-        load_graph(map=source.map).shortest_path(source.node.node_id, destination.node.node_id)
-    except NoRouteError as exc:
-        raise InvalidRequestError(f"destination not reachable from source: {exc}") from None
+    check_steps(steps, vehicle_type=vehicle_type, intended_vehicle=intended_vehicle)
+    chain, place = _join_sequence(sequence) if sequence else (None, None)
     order = TransportOrder.objects.create(
-        source=source,
-        destination=destination,
+        sequence=chain,
+        sequence_index=place,
+        source=steps[0].station,
+        destination=steps[-1].station,
         priority=priority,
         load_id=load_id,
         load_type=load_type,
         external_ref=external_ref,
         earliest_start=earliest_start,
         deadline=deadline,
+        intended_vehicle=intended_vehicle,
+        vehicle_type=vehicle_type,
+        metadata=metadata or {},
         created_by=created_by if isinstance(created_by, User) else None,
     )
+    save_steps(order.pk, steps)
     record(order.pk, Kind.CREATED, by=who(created_by))
+    audit.record(
+        "order.create",
+        target_type="order",
+        target_id=order.pk,
+        detail={
+            "steps": [[step.station.station_id, step.vda_action_type] for step in steps],
+            "priority": priority,
+            "external_ref": external_ref,
+        },
+    )
     broadcast_on_commit(LIVE_GROUP, "orders.changed", {"order": order.pk})
     dispatch_on_commit()
     return order
@@ -92,9 +124,57 @@ def update_order_priority(
     if changes:
         order.save(update_fields=["priority", "deadline", "updated_at"])
         record(order.pk, Kind.UPDATED, by=who(by), **changes)
+        audit.record("order.change", target_type="order", target_id=order.pk, detail=changes)
         broadcast_on_commit(LIVE_GROUP, "orders.changed", {"order": order.pk})
         if order.status == Status.NEW:
             dispatch_on_commit()
+    return order
+
+
+@transaction.atomic
+def reassign_order(
+    *,
+    order: TransportOrder,
+    vehicle: Vehicle | None,
+    by: AbstractBaseUser | AnonymousUser | None = None,
+) -> TransportOrder:
+    """Make `vehicle` the only one allowed to do the order (None: any vehicle again) and give an
+    assigned order back to dispatch. Only while no vehicle has received it: once control sent
+    it, the vehicle is driving it and only cancelling stops it."""
+    order = TransportOrder.objects.select_for_update().get(pk=order.pk)
+    sent = order.sent_at is not None or order.status == Status.IN_PROGRESS
+    if order.status not in (Status.NEW, Status.ASSIGNED) or sent:
+        raise DomainError(
+            f"order {order.pk} is {order.status}{' and sent to its vehicle' if sent else ''}; "
+            "only waiting or unsent orders can be reassigned (cancel it instead)"
+        )
+    if vehicle is not None and order.source.map.map_id not in (vehicle.map_id, ""):
+        raise InvalidRequestError(f"{vehicle} is not on map {order.source.map.map_id}")
+    name = str(vehicle) if vehicle is not None else "any vehicle"
+    previous = order.intended_vehicle_id
+    TransportOrder.objects.filter(pk=order.pk).update(intended_vehicle=vehicle)
+    if order.status == Status.ASSIGNED:
+        if order.vehicle is not None and order.vehicle.order_id == order.vda_order_id:
+            raise DomainError(f"{order.vehicle} already has order {order.pk}; cancel it instead")
+        requeue = transition(
+            order.pk,
+            {Status.ASSIGNED},
+            Status.NEW,
+            where=Q(sent_at__isnull=True, started_at__isnull=True),
+            vehicle=None,
+            route=[],
+            route_steps=[],
+            assigned_at=None,
+            dispatch_note=f"reassigned to {name}",
+        )
+        if requeue:
+            record(order.pk, Kind.REQUEUED, reason=f"reassigned to {name}", by=who(by))
+    elif previous != (vehicle.pk if vehicle else None):
+        record(order.pk, Kind.UPDATED, intended_vehicle=name, by=who(by))
+    audit.record("order.reassign", target_type="order", target_id=order.pk, detail={"to": name})
+    broadcast_on_commit(LIVE_GROUP, "orders.changed", {"order": order.pk})
+    dispatch_on_commit()
+    order.refresh_from_db()
     return order
 
 
@@ -116,6 +196,7 @@ def cancel_transport_order(
         record(order.pk, Kind.CANCEL_REQUESTED, reason=reason, by=who(by))
         order_id = order.pk
         transaction.on_commit(lambda: send_command("order.cancel", order=order_id), robust=True)
+    audit.record("order.cancel", target_type="order", target_id=order.pk, detail={"reason": reason})
     broadcast_on_commit(LIVE_GROUP, "orders.changed", {"order": order.pk})
     return order
 
@@ -137,9 +218,29 @@ def mark_order_started(*, order_id: int) -> None:
 
 
 @transaction.atomic
-def mark_step_reached(*, order_id: int, step: str, node_id: str) -> None:
-    """The vehicle finished the pick or drop action of the order at `node_id`."""
-    record(order_id, Kind.STEP_REACHED, step=step, node=node_id)
+def mark_step_reached(*, order_id: int, step: str, node_id: str, index: int | None = None) -> None:
+    """The vehicle reached step `index` (0-based) at `node_id` and finished its `step` action
+    there. Recorded once per step; `index` None (an older control) means the order's first
+    unfinished step of that action type."""
+    steps = OrderStep.objects.filter(order_id=order_id, finished_at__isnull=True)
+    if index is not None:
+        steps = steps.filter(index=index)
+    elif step in ("pick", "drop"):
+        steps = steps.filter(operation=step.upper())
+    else:
+        steps = steps.filter(action_type=step)
+    first = steps.order_by("index").first()
+    if first is not None:
+        OrderStep.objects.filter(pk=first.pk).update(finished_at=timezone.now())
+        floor.on_step_finished(step=first)  # inventory follows picks and drops (issue 8)
+        index = first.index
+    elif OrderStep.objects.filter(order_id=order_id).exists():
+        return  # already recorded (a resent state, a restarted control)
+    detail: dict[str, Any] = {"step": step, "node": node_id}
+    if index is not None:
+        detail["index"] = index
+    record(order_id, Kind.STEP_REACHED, **detail)
+    broadcast_on_commit(LIVE_GROUP, "orders.changed", {"order": order_id})
 
 
 @transaction.atomic
@@ -149,6 +250,12 @@ def mark_order_finished(*, order_id: int) -> None:
         order_id, set(TransportOrder.ACTIVE_STATUSES), Status.FINISHED, finished_at=timezone.now()
     ):
         record(order_id, Kind.FINISHED)
+        vehicle = Vehicle.objects.filter(transport_orders=order_id).first()
+        if vehicle is not None:
+            emit_vehicle_order_event(
+                event_type="vehicle.order_finished", vehicle=vehicle, order_id=order_id
+            )
+        floor.on_order_closed(order_id=order_id)
         dispatch_on_commit()
 
 
@@ -163,6 +270,7 @@ def mark_order_failed(*, order_id: int, reason: str) -> None:
         failure_reason=reason[:2000],
     ):
         record(order_id, Kind.FAILED, reason=reason)
+        floor.on_order_failed(order_id=order_id, reason=reason)
         dispatch_on_commit()
 
 
@@ -176,6 +284,7 @@ def requeue_order(*, order_id: int, reason: str) -> None:
         Status.NEW,
         vehicle=None,
         route=[],
+        route_steps=[],
         assigned_at=None,
         sent_at=None,
         dispatch_note="requeued: " + reason[:180],
@@ -191,7 +300,16 @@ def mark_order_cancelled(*, order_id: int) -> None:
         order_id, set(TransportOrder.OPEN_STATUSES), Status.CANCELLED, finished_at=timezone.now()
     ):
         record(order_id, Kind.CANCELLED)
+        floor.on_order_closed(order_id=order_id)
         dispatch_on_commit()
+
+
+def _join_sequence(reference: str) -> tuple[OrderSequence, int]:
+    """The sequence `reference` (created if new, locked so concurrent joins queue up) and the
+    place of the next order in it."""
+    OrderSequence.objects.get_or_create(reference=reference)
+    chain = OrderSequence.objects.select_for_update().get(reference=reference)
+    return chain, TransportOrder.objects.filter(sequence=chain).count()
 
 
 def _check_window(earliest_start: datetime | None, deadline: datetime | None) -> None:

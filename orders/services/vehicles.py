@@ -9,6 +9,7 @@ from django.contrib.auth.models import AnonymousUser, User
 from django.db import transaction
 from django.utils import timezone
 
+from fleet import audit
 from fleet.control_queue import send_command
 from fleet.exceptions import DomainError, InvalidRequestError
 from maps.models import Map, Station
@@ -89,6 +90,12 @@ def _queue(vehicle: Vehicle, kind: str, parameters: dict[str, Any], by: User_) -
         requested_by=by if isinstance(by, User) else None,
     )
     payload = {"vehicle": vehicle.pk, "command": command.pk, **parameters}
+    audit.record(
+        "vehicle.command",
+        target_type="vehicle",
+        target_id=vehicle,
+        detail={"kind": kind, "command": command.pk, **parameters},
+    )
     transaction.on_commit(lambda: send_command(kind, **payload), robust=True)
     emit_event(
         event_type="vehicle.command_queued",

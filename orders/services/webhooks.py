@@ -96,8 +96,10 @@ def emit_order_event(*, order_id: int, event_type: str, detail: dict[str, Any]) 
     wanted = _subscribers(event_type)
     if not wanted:
         return 0
-    order = TransportOrder.objects.select_related("source", "destination", "vehicle").get(
-        pk=order_id
+    order = (
+        TransportOrder.objects.select_related("source", "destination", "vehicle")
+        .prefetch_related("steps__station")
+        .get(pk=order_id)
     )
     wanted = [s for s in wanted if not s.own_orders_only or s.client.user_id == order.created_by_id]
     if not wanted:
@@ -114,6 +116,17 @@ def order_payload(order: TransportOrder) -> dict[str, Any]:
         "status": order.status,
         "source": order.source.station_id,
         "destination": order.destination.station_id,
+        "steps": [
+            {
+                "index": step.index,
+                "station": step.station.station_id,
+                "operation": step.operation,
+                "action_type": step.action_type,
+                "finished_at": step.finished_at,
+            }
+            for step in order.steps.all()
+        ],
+        "metadata": order.metadata,
         "vehicle": order.vehicle.serial_number if order.vehicle else None,
         "priority": order.priority,
         "load_id": order.load_id,

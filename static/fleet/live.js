@@ -210,9 +210,13 @@
     const title = svg("title", {}, group);
     const base = svg("polyline", { class: "route-base", "data-id": row.id }, state.layers.routes);
     const horizon = svg("polyline", { class: "route-horizon", "data-id": row.id }, state.layers.routes);
+    // Traffic management: nodes reserved beyond the base (light dots), and a line to the
+    // vehicle this one waits for at its decision point.
+    const reserved = svg("g", { class: "reserved", "data-id": row.id }, state.layers.routes);
+    const wait = svg("line", { class: "wait-link", "data-id": row.id }, state.layers.routes);
     group.addEventListener("click", () => selectVehicle(row.id));
     return {
-      group, ring, body, load, label, title, base, horizon,
+      group, ring, body, load, label, title, base, horizon, reserved, wait, waitsFor: null,
       route: { base: [], horizon: [] },
       pose: null, from: null, to: null, t0: 0, duration: 0, lastUpdate: 0, interval: 0,
     };
@@ -224,6 +228,8 @@
     sprite.group.remove();
     sprite.base.remove();
     sprite.horizon.remove();
+    sprite.reserved.remove();
+    sprite.wait.remove();
     state.sprites.delete(id);
   }
 
@@ -244,6 +250,8 @@
       return;
     }
     sprite.route = { base: row.base || [], horizon: row.horizon || [] };
+    drawReserved(sprite, row.reserved || []);
+    sprite.waitsFor = (row.waiting_for || [])[0] || null;
     const theta = Number.isFinite(row.theta) ? row.theta : (sprite.to ? sprite.to.theta : 0);
     setTarget(sprite, { x: row.x, y: row.y, theta }, now);
   }
@@ -253,6 +261,40 @@
     Object.assign(sprite, { pose: null, from: null, to: null, route: { base: [], horizon: [] } });
     sprite.base.setAttribute("points", "");
     sprite.horizon.setAttribute("points", "");
+    drawReserved(sprite, []);
+    sprite.waitsFor = null;
+    sprite.wait.style.display = "none";
+  }
+
+  function drawReserved(sprite, nodes) {
+    const key = JSON.stringify(nodes);
+    if (sprite.reserved.dataset.key === key) return;
+    sprite.reserved.dataset.key = key;
+    sprite.reserved.textContent = "";
+    for (const [x, y] of nodes) {
+      svg("circle", { class: "reserved-node", cx: fmt(x), cy: fmt(-y), r: 0.45 }, sprite.reserved);
+    }
+  }
+
+  // A waiting vehicle points at the one it waits for (both drawn where they are now).
+  function drawWait(sprite, pose) {
+    const other = sprite.waitsFor ? spriteBySerial(sprite.waitsFor) : null;
+    if (!other || !other.pose) {
+      sprite.wait.style.display = "none";
+      return;
+    }
+    sprite.wait.style.display = "";
+    sprite.wait.setAttribute("x1", fmt(pose.x));
+    sprite.wait.setAttribute("y1", fmt(-pose.y));
+    sprite.wait.setAttribute("x2", fmt(other.pose.x));
+    sprite.wait.setAttribute("y2", fmt(-other.pose.y));
+  }
+
+  function spriteBySerial(serial) {
+    for (const [id, row] of state.vehicles) {
+      if (row.serial === serial) return state.sprites.get(id) || null;
+    }
+    return null;
   }
 
   // Start a tween from where the vehicle is drawn now to `target`, lasting about as long as
@@ -300,6 +342,7 @@
     const horizonPoints = horizon.length ? [horizonStart, ...horizon] : [];
     sprite.base.setAttribute("points", points(basePoints));
     sprite.horizon.setAttribute("points", points(horizonPoints));
+    drawWait(sprite, pose);
   }
 
   function requestFrame() {
@@ -387,7 +430,7 @@
 
   // ---------------------------------------------------------------- vehicles table
 
-  const VEHICLE_COLUMNS = ["serial", "status", "battery", "mode", "last_node", "order", "errors"];
+  const VEHICLE_COLUMNS = ["serial", "status", "battery", "mode", "last_node", "order", "waits", "errors"];
 
   function vehicleTableBody() {
     return document.querySelector("#vehicles-table tbody");
@@ -439,10 +482,11 @@
     setText(cells[3], row.mode ? String(row.mode).toLowerCase() : "");
     setText(cells[4], row.last_node);
     setText(cells[5], row.transport_order ? `TO-${row.transport_order}` : row.order);
+    setText(cells[6], (row.waiting_for || []).join(", "));
     const errors = row.errors || [];
-    setText(cells[6], errors.join(", "));
-    cells[6].title = errors.join("\n");
-    cells[6].classList.toggle("has-errors", errors.length > 0);
+    setText(cells[7], errors.join(", "));
+    cells[7].title = errors.join("\n");
+    cells[7].classList.toggle("has-errors", errors.length > 0);
     tr.classList.toggle("offline", row.status === "offline");
   }
 

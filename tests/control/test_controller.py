@@ -643,17 +643,23 @@ def test_B12_new_base_request_releases_more_at_once(stepwise, sent) -> None:
     assert released(update) == [("b", 2, True), ("c", 4, True), ("d", 6, False)]
 
 
-def test_commands_control_cannot_carry_out_yet_are_refused_with_the_reason(
+def test_charge_and_park_commands_go_to_the_flusher_which_opens_their_jobs(
     controller, sent
 ) -> None:
+    """Issue 7: the database side turns them into a charge session or a move to a station."""
     controller.handle_message(STATE_TOPIC, state(header_id=1))
     sent.clear()
 
-    controller.execute({"kind": "vehicle.charge", "vehicle": 1, "command": 5, "station": "C-1"})
+    controller.execute({"kind": "vehicle.park", "vehicle": 1, "command": 5, "station": "P-1"})
+    controller.execute({"kind": "vehicle.charge", "vehicle": 1, "command": 6})
+    controller.flush()
 
-    (track,) = controller.fleet.by_pk(1).instant_actions.values()
-    assert (track.status, track.request) == ("REFUSED", "5")
-    assert "not supported yet" in track.reason
+    requests = controller.store.batches[-1].job_requests
+    assert [(r["kind"], r["command"]) for r in requests] == [
+        ("vehicle.park", 5),
+        ("vehicle.charge", 6),
+    ]
+    assert controller.fleet.by_pk(1).instant_actions == {}
     assert sent == []
 
 
@@ -672,7 +678,9 @@ def test_command_outcomes_reach_the_flusher_sent_then_finished(controller, sent)
 
 def test_command_outcomes_survive_a_failed_flush(controller) -> None:
     controller.handle_message(STATE_TOPIC, state(header_id=1))
-    controller.execute({"kind": "vehicle.park", "vehicle": 1, "command": 4})
+    controller.execute(
+        {"kind": "vehicle.instant_action", "vehicle": 1, "command": 4, "action_type": "nope"}
+    )
     controller.store.fail_flush = True
     controller.flush()
     controller.store.fail_flush = False

@@ -1,5 +1,7 @@
 """1,000+ malformed, oversized, hostile and mismatched messages over a real broker never stop
-`control`: each is rejected and counted, and the next valid message is applied."""
+`control`: each is rejected and counted (shown in the vehicle's protocol counters, which the
+registry stores and alerts report), and the next valid message is applied. Mismatched: a
+payload whose serial number differs from its topic's, and 2.x payloads on the 3.0 topic."""
 
 import json
 import time
@@ -57,13 +59,19 @@ def test_a_flood_of_bad_messages_is_counted_and_the_next_good_one_applies() -> N
     try:
         assert link.connected.wait(10)
         topic = f"{interface}/v2/sim/AGV-1/state"
+        topic3 = f"{interface}/v3/sim/AGV-1/state"
         sent = 0
         for round_ in range(70):
             for payload in hostile_payloads():
                 attacker.publish(topic, payload, qos=1).wait_for_publish(30)
                 sent += 1
             attacker.publish(f"{interface}/v2/sim/AGV-{round_}/state", state(serial="EVIL"), qos=1)
-            sent += 1
+            attacker.publish(topic, state(serial="EVIL"), qos=1)  # topic AGV-1, payload EVIL
+            sent += 2
+            if round_ % 10 == 0:  # version mismatch: 2.x (and garbage) on the 3.0 topic
+                for payload in hostile_payloads():
+                    attacker.publish(topic3, payload, qos=1).wait_for_publish(30)
+                    sent += 1
         attacker.publish(topic, state(header_id=42, last_node="c"), qos=1).wait_for_publish(30)
 
         deadline = time.monotonic() + 60
@@ -87,4 +95,9 @@ def test_a_flood_of_bad_messages_is_counted_and_the_next_good_one_applies() -> N
     assert counters["identity_mismatch"] >= 1
     assert controller.counters["handler_errors"] == 0
     assert set(controller.fleet.vehicles) == {("sim", "AGV-1")}
+    # Shown: the vehicle's protocol counters go to the registry with its next snapshot.
+    controller.flush()
+    (row,) = [r for b in controller.store.batches for r in b.snapshots if r["pk"] == 1]
+    assert row["protocol_counters"]["decode_errors"] >= 1000
+    assert row["protocol_counters"]["identity_mismatch"] >= 70
     print(f"hostile: {sent} bad messages rejected, counters {dict(controller.counters)}")

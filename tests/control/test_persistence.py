@@ -55,7 +55,7 @@ def test_a_refused_command_keeps_its_reason() -> None:
 
     command.refresh_from_db()
     assert command.status == VehicleCommand.Status.REFUSED
-    assert "not supported yet" in command.result
+    assert "has no known position" in command.result  # issue 7: parking needs a position
 
 
 def test_a_speed_zone_lowers_max_speed_in_the_sent_order(demo_map) -> None:

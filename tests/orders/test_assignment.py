@@ -3,7 +3,7 @@
 from datetime import UTC, datetime, timedelta
 
 from orders.assignment import Candidate, Job, plan_batch, plan_greedy, urgency_key
-from traffic import RoutingGraph
+from traffic import RoutingGraph, VehicleProfile
 from traffic.routing import GraphEdge
 
 NOW = datetime(2026, 11, 23, 8, 0, tzinfo=UTC)
@@ -119,3 +119,36 @@ def test_no_candidates_means_every_job_waits() -> None:
 
     assert plan.pairs == []
     assert plan.notes == {1: "no vehicle available"}
+
+
+def test_travel_time_per_vehicle_type_decides_not_distance() -> None:
+    graph = line()
+    fast = VehicleProfile(vehicle_type="fast", max_speed=3.0)
+    slow = VehicleProfile(vehicle_type="slow", max_speed=0.5)
+    # The slow vehicle is nearer (2 m = 4 s), the fast one farther (4 m = 1.3 s).
+    vehicles = [Candidate(10, "n2", profile=slow), Candidate(11, "n8", profile=fast)]
+
+    by_distance = plan_batch([job(1, "n4")], vehicles, graph.distances_to, now=NOW)
+    by_time = plan_batch(
+        [job(1, "n4")],
+        vehicles,
+        graph.travel_times_to,
+        now=NOW,
+        by_profile=lambda goal, profile: graph.travel_times_to(goal, vehicle=profile),  # type: ignore[arg-type]
+    )
+
+    assert pairs(by_distance) == {1: 10}
+    assert pairs(by_time) == {1: 11}
+    assert by_time.empty_travel < 2.0
+
+
+def test_a_job_takes_only_its_allowed_vehicles_and_says_so_when_none_is_idle() -> None:
+    graph = line()
+    vehicles = [Candidate(10, "n4"), Candidate(11, "n9")]
+    jobs = [job(1, "n4", allowed=frozenset({11})), job(2, "n5", allowed=frozenset({12}))]
+
+    batch = plan_batch(jobs, vehicles, graph.distances_to, now=NOW)
+    greedy = plan_greedy(jobs, vehicles, graph.distances_to)
+
+    assert pairs(batch) == pairs(greedy) == {1: 11}
+    assert batch.notes == {2: "waiting: no vehicle allowed to take it is idle"}

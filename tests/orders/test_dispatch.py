@@ -128,7 +128,7 @@ def test_a_vehicle_taken_meanwhile_is_refused_by_the_database(station) -> None:
 
     from orders.services import dispatch
 
-    assert not dispatch._assign(order=order, vehicle=vehicle, route=["A0.0"])
+    assert not dispatch._assign(order=order, vehicle=vehicle, route=["A0.0"], route_steps=[0])
     order.refresh_from_db()
     assert order.status == Status.NEW
 
@@ -140,7 +140,7 @@ def test_dispatch_of_a_cancelled_or_assigned_order_does_nothing(station) -> None
     assert services.dispatch_pending_orders() == []
     from orders.services import dispatch
 
-    assert not dispatch._assign(order=order, vehicle=vehicle, route=["A0.0"])
+    assert not dispatch._assign(order=order, vehicle=vehicle, route=["A0.0"], route_steps=[0])
 
 
 def stale(station, vehicle, *, minutes: float = 5, **fields) -> TransportOrder:

@@ -55,9 +55,11 @@ def test_order_events_are_delivered_signed(
     assert events(endpoint) == [
         "order.created",
         "order.assigned",
+        "vehicle.order_assigned",
         "order.started",
         "order.step_reached",
         "order.finished",
+        "vehicle.order_finished",
     ]
     first = endpoint.received[0]
     body = json.loads(first.body)
@@ -72,9 +74,10 @@ def test_order_events_are_delivered_signed(
     delivery = WebhookDelivery.objects.filter(event_type="order.created").get()
     assert (delivery.status, delivery.attempts) == (Status.DELIVERED, 1)
     assert delivery.log.get().status_code == 200
-    assert json.loads(endpoint.received[3].body)["data"]["detail"] == {
+    assert json.loads(endpoint.received[4].body)["data"]["detail"] == {
         "step": "pick",
         "node": "S-PICK-1",
+        "index": 0,
     }
 
 

@@ -20,6 +20,7 @@ from vda5050.adapt.common import (
     action_type_v3,
     error_level_v3,
     is_retriable,
+    retriable_result,
 )
 from vda5050.adapt.factsheet import factsheet_v3_to_v2
 from vda5050.adapt.messages import (
@@ -31,6 +32,7 @@ from vda5050.adapt.messages import (
     visualization_v3_to_v2,
 )
 from vda5050.adapt.order import (
+    RetriableAction,
     action_to_v2,
     action_to_v3,
     instant_actions_v2_to_v3,
@@ -45,7 +47,9 @@ __all__ = [
     "ACTION_TYPES_V3_TO_V2",
     "ERROR_LEVEL_KEY",
     "RETRIABLE_MARKER",
+    "RetriableAction",
     "action_to_v2",
+    "retriable_result",
     "action_to_v3",
     "action_type_v2",
     "action_type_v3",

@@ -7,7 +7,8 @@
 (its negation: rotation not allowed on the edge = reach the orientation before entering),
 ``allowedDeviationXY`` radius ``r`` → ellipse ``{a: r, b: r, theta: 0}``, corridor
 ``KINEMATICCENTER`` → ``KINEMATIC_CENTER``, ``initPosition`` → ``initializePosition``;
-``orderDescription`` and ``retriable`` stay unset; ``zoneSetId`` and
+``orderDescription`` stays unset, ``retriable`` is set on the actions the caller names (a 2.x
+action that came from 3.0 as :class:`RetriableAction` keeps its own); ``zoneSetId`` and
 ``nodePosition.mapDescription`` are dropped. Instant actions always get blockingType NONE
 (REFERENCE §3 E.23). The header is copied; build the 2.x message with the 3.0 version so
 headerId counting and the ``.fffZ`` timestamp are right, or pass ``version``.
@@ -15,18 +16,22 @@ headerId counting and the ``.fffZ`` timestamp are right, or pass ``version``.
 3.0 → 2.x (a 3.0 robot, or the simulator, reading orders with 2.x logic) is the inverse:
 edge start/end node ids come from the neighbouring nodes (``""`` where a malformed order has
 none), an ellipse becomes its smaller semi-axis (never accepting a position the ellipse
-excludes), blockingType SINGLE stays the string ``"SINGLE"``, the 3.0-only ``retriable``,
-``orderDescription`` and corridor release fields are dropped. Round trips are lossless for
-messages without those fields.
+excludes), blockingType SINGLE stays the string ``"SINGLE"``, an action with ``retriable``
+becomes a :class:`RetriableAction` (a 2.x Action that keeps the flag for the vehicle side,
+REFERENCE §3 E.27), the 3.0-only ``orderDescription`` and corridor release fields are dropped.
+Round trips are lossless for messages without those fields.
 """
 
 from __future__ import annotations
+
+from collections.abc import Collection
 
 from vda5050 import v2, v3
 from vda5050.adapt.common import action_type_v2, action_type_v3, to_v2, to_v3
 from vda5050.enums import BlockingType, CorridorRefPoint
 
 __all__ = [
+    "RetriableAction",
     "instant_actions_v2_to_v3",
     "instant_actions_v3_to_v2",
     "order_v2_to_v3",
@@ -34,8 +39,19 @@ __all__ = [
 ]
 
 
-def order_v2_to_v3(order: v2.Order, *, version: str | None = None) -> v3.Order:
-    """A 2.x order (or update) as 3.0 ``order``; ``version`` overrides the header version."""
+class RetriableAction(v2.Action, kw_only=True):
+    """A 3.0 order action read with 2.x logic that keeps its ``retriable`` flag: a failure
+    enters RETRIABLE (2.x model: PAUSED, marked) and waits for ``retry``/``skipRetry``.
+    Only ever built from a 3.0 message; never sent to a 2.x vehicle."""
+
+    retriable: bool | None = None
+
+
+def order_v2_to_v3(
+    order: v2.Order, *, version: str | None = None, retriable: Collection[str] = ()
+) -> v3.Order:
+    """A 2.x order (or update) as 3.0 ``order``; ``version`` overrides the header version,
+    the node and edge actions whose ids are in ``retriable`` get ``retriable: true``."""
     return v3.Order(
         header_id=order.header_id,
         timestamp=order.timestamp,
@@ -44,8 +60,8 @@ def order_v2_to_v3(order: v2.Order, *, version: str | None = None) -> v3.Order:
         serial_number=order.serial_number,
         order_id=order.order_id,
         order_update_id=order.order_update_id,
-        nodes=[_node_to_v3(node) for node in order.nodes],
-        edges=[_edge_to_v3(edge) for edge in order.edges],
+        nodes=[_node_to_v3(node, retriable) for node in order.nodes],
+        edges=[_edge_to_v3(edge, retriable) for edge in order.edges],
     )
 
 
@@ -95,8 +111,13 @@ def instant_actions_v3_to_v2(message: v3.InstantActions) -> v2.InstantActions:
     )
 
 
-def action_to_v3(action: v2.Action, *, instant: bool = False) -> v3.Action:
-    """One 2.x action in 3.0 shape (``instant``: blockingType NONE)."""
+def action_to_v3(
+    action: v2.Action, *, instant: bool = False, retriable: bool | None = None
+) -> v3.Action:
+    """One 2.x action in 3.0 shape (``instant``: blockingType NONE; ``retriable`` as given,
+    else the flag a :class:`RetriableAction` kept)."""
+    if retriable is None and not instant:
+        retriable = getattr(action, "retriable", None)
     return v3.Action(
         action_type=action_type_v3(action.action_type),
         action_id=action.action_id,
@@ -107,11 +128,24 @@ def action_to_v3(action: v2.Action, *, instant: bool = False) -> v3.Action:
         action_parameters=None
         if action.action_parameters is None
         else list(action.action_parameters),
+        retriable=retriable,
     )
 
 
 def action_to_v2(action: v3.Action) -> v2.Action:
-    """One 3.0 action in 2.x shape (SINGLE kept as a string, ``retriable`` dropped)."""
+    """One 3.0 action in 2.x shape (SINGLE kept as a string, ``retriable`` kept by a
+    :class:`RetriableAction`)."""
+    if action.retriable is not None:
+        return RetriableAction(
+            action_type=action_type_v2(action.action_type),
+            action_id=action.action_id,
+            action_description=action.action_descriptor,
+            blocking_type=to_v2(BlockingType, action.blocking_type),
+            action_parameters=None
+            if action.action_parameters is None
+            else list(action.action_parameters),
+            retriable=action.retriable,
+        )
     return v2.Action(
         action_type=action_type_v2(action.action_type),
         action_id=action.action_id,
@@ -151,7 +185,11 @@ def trajectory_to_v2(trajectory: v3.Trajectory | None) -> v2.Trajectory | None:
     return v2.Trajectory(degree=degree, knot_vector=list(knots), control_points=points)
 
 
-def _node_to_v3(node: v2.Node) -> v3.Node:
+def _marked(action: v2.Action, retriable: Collection[str]) -> v3.Action:
+    return action_to_v3(action, retriable=True if action.action_id in retriable else None)
+
+
+def _node_to_v3(node: v2.Node, retriable: Collection[str] = ()) -> v3.Node:
     pos = node.node_position
     position = None
     if pos is not None:
@@ -172,7 +210,7 @@ def _node_to_v3(node: v2.Node) -> v3.Node:
         node_descriptor=node.node_description,
         released=node.released,
         node_position=position,
-        actions=[action_to_v3(action) for action in node.actions],
+        actions=[_marked(action, retriable) for action in node.actions],
     )
 
 
@@ -199,7 +237,7 @@ def _node_to_v2(node: v3.Node) -> v2.Node:
     )
 
 
-def _edge_to_v3(edge: v2.Edge) -> v3.Edge:
+def _edge_to_v3(edge: v2.Edge, retriable: Collection[str] = ()) -> v3.Edge:
     corridor = edge.corridor
     return v3.Edge(
         edge_id=edge.edge_id,
@@ -231,7 +269,7 @@ def _edge_to_v3(edge: v2.Edge) -> v3.Edge:
                 ),
             )
         ),
-        actions=[action_to_v3(action) for action in edge.actions],
+        actions=[_marked(action, retriable) for action in edge.actions],
     )
 
 

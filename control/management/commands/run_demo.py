@@ -21,6 +21,7 @@ from control.demo import (
     DEMO_PASSWORD,
     DEMO_USER,
     Children,
+    EmbeddedBeat,
     OrderStream,
     ensure_demo_data,
     wait_for_port,
@@ -117,6 +118,13 @@ class Command(BaseCommand):
         control = build_control_loop()
         thread = threading.Thread(target=control.run, name="control", daemon=True)
         thread.start()
+        from orders.tasks import PERIODIC
+
+        periodic = {
+            name: {"task": task, "schedule": every} for name, (every, task) in PERIODIC.items()
+        }
+        beat = EmbeddedBeat(settings.CELERY_BEAT_SCHEDULE | periodic)
+        beat.start()
         server = Server(
             application=application,
             signal_handlers=True,
@@ -127,6 +135,7 @@ class Command(BaseCommand):
         try:
             server.run()  # returns on SIGINT/SIGTERM
         finally:
+            beat.stopped.set()
             control.stop()
             thread.join(timeout=10)
 

@@ -1,0 +1,1 @@
+"""Read API v1 of the battery app."""

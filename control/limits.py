@@ -1,0 +1,76 @@
+"""REFERENCE J.44: the factsheet's string limits, checked on every message before it is sent.
+
+`protocolLimits.maxStringLens` (3.0 `maximumStringLengths`): msgLen (the encoded message),
+topicSerialLen (the serial number in the topic), topicElemLen (every topic level), idLen and
+idNumericalOnly (every id we send: orderId, nodeId, edgeId, actionId, mapId), enumLen (every
+enum value we send) and loadIdLen (the loadId action parameter). 0 or absent = no limit. A
+message that does not fit is not sent: the order (or instant action) is refused with the
+reason instead, because the vehicle would only reject it.
+"""
+
+from typing import Any
+
+from control.capabilities import StringLimits
+
+_ID_KEYS = frozenset({"orderId", "nodeId", "edgeId", "actionId", "mapId"})
+_ENUM_KEYS = frozenset({"blockingType", "orientationType", "corridorRefPoint"})
+
+
+class ProtocolLimitError(ValueError):
+    """A message breaks one of the vehicle's protocol limits; the text says which."""
+
+
+def check_message(limits: StringLimits, topic: str, payload: bytes, message: Any) -> None:
+    """Raise ProtocolLimitError if `message` (as `payload` on `topic`) breaks `limits`.
+
+    `message` is the decoded JSON of `payload` (dicts and lists).
+    """
+    if limits.msg_len is not None and len(payload) > limits.msg_len:
+        raise ProtocolLimitError(
+            f"message of {len(payload)} bytes exceeds the vehicle's msgLen {limits.msg_len}"
+        )
+    levels = topic.split("/")
+    if limits.topic_serial_len is not None and len(levels) >= 4:
+        serial = levels[3]
+        if len(serial) > limits.topic_serial_len:
+            raise ProtocolLimitError(
+                f"serial number {serial!r} exceeds topicSerialLen {limits.topic_serial_len}"
+            )
+    if limits.topic_elem_len is not None:
+        for level in levels:
+            if len(level) > limits.topic_elem_len:
+                raise ProtocolLimitError(
+                    f"topic level {level!r} exceeds topicElemLen {limits.topic_elem_len}"
+                )
+    for key, value in _strings(message):
+        _check_string(limits, key, value)
+
+
+def _check_string(limits: StringLimits, key: str, value: str) -> None:
+    if key in _ID_KEYS:
+        if limits.id_len is not None and len(value) > limits.id_len:
+            raise ProtocolLimitError(f"{key} {value!r} exceeds idLen {limits.id_len}")
+        if limits.id_numerical_only and not value.isdigit():
+            raise ProtocolLimitError(
+                f"{key} {value!r} is not numerical; the vehicle takes numerical ids only"
+            )
+    elif key in _ENUM_KEYS and limits.enum_len is not None and len(value) > limits.enum_len:
+        raise ProtocolLimitError(f"{key} {value!r} exceeds enumLen {limits.enum_len}")
+    elif key == "loadId" and limits.load_id_len is not None and len(value) > limits.load_id_len:
+        raise ProtocolLimitError(f"loadId {value!r} exceeds loadIdLen {limits.load_id_len}")
+
+
+def _strings(node: Any, key: str = "") -> list[tuple[str, str]]:
+    """(key, value) of every string in a decoded message; action parameters under their key."""
+    found: list[tuple[str, str]] = []
+    if isinstance(node, dict):
+        if set(node) == {"key", "value"} and isinstance(node["key"], str):
+            return _strings(node["value"], node["key"])  # an action parameter
+        for child_key, child in node.items():
+            found += _strings(child, child_key)
+    elif isinstance(node, list):
+        for child in node:
+            found += _strings(child, key)
+    elif isinstance(node, str):
+        found.append((key, node))
+    return found

@@ -1,0 +1,362 @@
+"""Traffic management in `control`: one `traffic.TrafficManager` per map, fed by state messages.
+
+The link decides how far each vehicle's VDA 5050 base may reach (docs TRAFFIC.md §0): an order's
+route is planned with the manager when the order starts, and each state message reports progress
+(`on_progress`), which clears what the vehicle left and may release more base to it and to the
+vehicles that waited for it. All of this runs in memory under the controller's lock: no database
+and no Celery on the hot path. The driver asks `base_end` how far it may release; the rest of the
+route goes out as horizon.
+
+Vehicles in error (FATAL), in a manual mode or offline are static obstacles (`block`) until they
+are back in automatic mode at a known node (`restore`). Route index i of a plan is node sequence
+id 2·i, as everywhere in `control`.
+"""
+
+import logging
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+
+import vda5050
+from control.execution import LayoutIndex, OrderExecution, Window
+from control.live import LiveVehicle
+from control.session import Link
+from control.traffic_support import (
+    DEFAULT_CLASS,
+    DWELL,
+    Stats,
+    blocking_reason,
+    envelope,
+    layout_of,
+    vehicle_class,
+    window,
+)
+from traffic import Goal, NoPlanError, Plan, ReleasePolicy, TrafficManager
+
+logger = logging.getLogger(__name__)
+
+UNPLANNED = "driving an order traffic did not plan"
+
+
+@dataclass
+class Tracked:
+    """One vehicle under traffic control."""
+
+    vehicle: LiveVehicle
+    map_id: str
+    order_id: str | None = None  # the VDA 5050 order the manager's plan belongs to
+    static: str | None = None  # why it is a static obstacle
+    # An order driven while traffic lost track of it (blocked mid-order, adopted after a
+    # restart): it gets no more base until the vehicle stops at its decision point and is
+    # planned again from there, route index `offset` of the order being index 0 of the plan.
+    lost: str | None = None
+    offset: int = 0
+
+
+class TrafficLink:
+    """Traffic managers of every map and the vehicles they control (call under the lock)."""
+
+    def __init__(
+        self,
+        fleet: Callable[[], Iterable[LiveVehicle]] = tuple,
+        *,
+        policy: ReleasePolicy | None = None,
+        dwell: float = DWELL,
+    ) -> None:
+        self.fleet = fleet
+        self.policy = policy or ReleasePolicy()
+        self.dwell = dwell
+        self.managers: dict[str, TrafficManager] = {}
+        self._indexes: dict[str, LayoutIndex] = {}
+        self._layouts: object = None
+        self.tracked: dict[str, Tracked] = {}
+        self.stats = Stats()
+        self.problems: dict[str, int] = {}
+
+    # -- maps and vehicles ------------------------------------------------------------------
+
+    def ensure(self, layouts: dict[str, LayoutIndex]) -> None:
+        """Follow the controller's layouts (cheap when they are the same object as before)."""
+        if layouts is not self._layouts:
+            self._layouts = layouts
+            self.set_layouts(layouts)
+
+    def set_layouts(self, layouts: dict[str, LayoutIndex]) -> None:
+        """Build a manager per map; a changed map starts afresh (its vehicles re-register)."""
+        for map_id in list(self.managers):
+            if layouts.get(map_id) != self._indexes.get(map_id):
+                del self.managers[map_id], self._indexes[map_id]
+                for name in [n for n, t in self.tracked.items() if t.map_id == map_id]:
+                    del self.tracked[name]
+        classes = [vehicle_class(v.factsheet) for v in self.fleet()]
+        for map_id, index in layouts.items():
+            if map_id not in self.managers:
+                self.managers[map_id] = TrafficManager(
+                    layout_of(index), (envelope([DEFAULT_CLASS, *classes]),), policy=self.policy
+                )
+                self._indexes[map_id] = index
+
+    def _count(self, problem: str) -> None:
+        self.problems[problem] = self.problems.get(problem, 0) + 1
+        if self.problems[problem] <= 10:
+            logger.warning("traffic: %s", problem)
+
+    def _register(self, vehicle: LiveVehicle, state: vda5050.State, now: float) -> Tracked | None:
+        node = state.last_node_id
+        map_id = state.agv_position.map_id if state.agv_position is not None else ""
+        candidates = [map_id] if map_id in self.managers else list(self.managers)
+        for candidate in candidates:
+            manager = self.managers[candidate]
+            if node not in manager.layout.index:
+                continue
+            try:
+                manager.add_vehicle(name(vehicle), node, now)
+            except ValueError as exc:
+                self._count(f"cannot place {name(vehicle)}: {exc}")
+                return None
+            tracked = self.tracked[name(vehicle)] = Tracked(vehicle, candidate)
+            return tracked
+        return None
+
+    def _reset(self, tracked: Tracked, node: str, now: float) -> None:
+        """Drop whatever plan the vehicle had: it stands at `node` (block, then restore)."""
+        manager = self.managers[tracked.map_id]
+        if node not in manager.layout.index:
+            self._count(f"{name(tracked.vehicle)} reports unknown node {node!r}")
+            return
+        manager.block(name(tracked.vehicle), now)
+        manager.restore(name(tracked.vehicle), node, now)
+        tracked.order_id = None
+
+    # -- hot path -----------------------------------------------------------------------------
+
+    def observe(self, vehicle: LiveVehicle, state: vda5050.State, now: float) -> list[LiveVehicle]:
+        """Take one state message; returns the other vehicles that got more base released."""
+        started = time.perf_counter()
+        try:
+            return self._observe(vehicle, state, now)
+        finally:
+            self.stats.add(time.perf_counter() - started)
+
+    def _observe(self, vehicle: LiveVehicle, state: vda5050.State, now: float) -> list[LiveVehicle]:
+        tracked = self.tracked.get(name(vehicle))
+        if tracked is None:
+            if not state.last_node_id or blocking_reason(vehicle, state, now) is not None:
+                return []
+            tracked = self._register(vehicle, state, now)
+            if tracked is None:
+                return []
+        manager = self.managers[tracked.map_id]
+        reason = blocking_reason(vehicle, state, now)
+        if reason is None and state.node_states and state.order_id != tracked.order_id:
+            reason = UNPLANNED  # e.g. adopted after a restart
+        if tracked.lost is not None and tracked.lost == state.order_id:
+            if reason in (None, UNPLANNED):
+                return self._readopt(tracked, state, now)
+            return []
+        if reason is not None or tracked.static is not None:
+            return self._mode_change(tracked, reason, state, now)
+        if tracked.order_id is None or state.order_id != tracked.order_id:
+            return []
+        passed = (state.last_node_sequence_id or 0) // 2 - tracked.offset
+        v = manager.vehicle(name(vehicle))
+        if not 0 <= passed < len(v.route) or manager.layout.node_ids[v.route[passed]] != (
+            state.last_node_id
+        ):
+            # Not a node of this plan: the sequence id of the previous order, which a vehicle
+            # keeps until it passes the first node of the new one.
+            return []
+        try:
+            releases = manager.on_progress(name(vehicle), passed, now)
+        except ValueError as exc:  # beyond its base: it drove what we never released
+            self._count(str(exc))
+            return []
+        me = name(vehicle)
+        return [self.tracked[r.vehicle_id].vehicle for r in releases if r.vehicle_id != me]
+
+    def _mode_change(
+        self, tracked: Tracked, reason: str | None, state: vda5050.State, now: float
+    ) -> list[LiveVehicle]:
+        manager = self.managers[tracked.map_id]
+        me = name(tracked.vehicle)
+        if reason is not None and tracked.static is None:
+            replanned = manager.block(me, now)
+            # What it still drives stays held (block keeps the released base); the rest of the
+            # order waits for re-adoption at its decision point.
+            driving = state is not None and bool(state.node_states) and state.order_id
+            tracked.lost = tracked.order_id or (state.order_id if driving else None)
+            tracked.static, tracked.order_id = reason, None
+            logger.info("traffic: %s is a static obstacle (%s)", me, reason)
+            return [self.tracked[n].vehicle for n in replanned if n in self.tracked]
+        if reason is None and tracked.static is not None:
+            if state.last_node_id not in manager.layout.index:
+                return []
+            try:
+                manager.restore(me, state.last_node_id, now)
+            except ValueError as exc:
+                self._count(f"cannot restore {me}: {exc}")
+                return []
+            tracked.static, tracked.order_id = None, None
+            logger.info("traffic: %s is back under traffic control", me)
+        return []
+
+    def _readopt(self, tracked: Tracked, state: vda5050.State, now: float) -> list[LiveVehicle]:
+        """Plan a lost order again once its vehicle waits at its decision point."""
+        execution = tracked.vehicle.execution
+        if execution is None or execution.vda_order_id != state.order_id:
+            return []
+        decision = execution.released_until
+        if (state.last_node_sequence_id or 0) // 2 != decision or any(
+            n.released and n.sequence_id > 2 * decision for n in state.node_states
+        ):
+            return []  # still driving its released base
+        manager, me = self.managers[tracked.map_id], name(tracked.vehicle)
+        if tracked.static is not None:
+            try:
+                manager.restore(me, state.last_node_id, now)
+            except (ValueError, KeyError) as exc:
+                self._count(f"cannot restore {me}: {exc!r}")
+                return []
+            tracked.static = None
+        goals = [execution.route[i] for i in execution.stop_indices if i > decision]
+        if goals:
+            try:
+                manager.plan(me, [Goal(g, self.dwell) for g in goals], now)
+            except NoPlanError as exc:
+                self._count(f"no plan to re-adopt {state.order_id}: {exc}")
+                return []
+        tracked.order_id, tracked.lost, tracked.offset = state.order_id, None, decision
+        logger.info("traffic: %s re-adopted %s at route index %d", me, state.order_id, decision)
+        return []
+
+    def lost(self, vehicle: LiveVehicle, order_id: str) -> bool:
+        """Whether `order_id` waits for re-adoption (the driver releases nothing meanwhile)."""
+        tracked = self.tracked.get(name(vehicle))
+        return tracked is not None and tracked.lost == order_id
+
+    # -- orders -------------------------------------------------------------------------------
+
+    def start(
+        self, vehicle: LiveVehicle, order_id: str, map_id: str, goals: list[str], now: float
+    ) -> Plan | None:
+        """Plan a new order through `goals` from where the vehicle stands; None: not now."""
+        tracked = self.tracked.get(name(vehicle))
+        state = vehicle.state
+        if tracked is None or tracked.static is not None or state is None:
+            return None
+        if tracked.map_id != map_id:
+            self._count(f"{name(vehicle)} is on map {tracked.map_id}, order is on {map_id}")
+            return None
+        manager = self.managers[map_id]
+        v = manager.vehicle(name(vehicle))
+        here = manager.layout.node_ids[v.route[v.passed]]
+        if v.passed != len(v.route) - 1 or here != state.last_node_id:
+            self._reset(tracked, state.last_node_id, now)
+        try:
+            plan = manager.plan(name(vehicle), [Goal(g, self.dwell) for g in goals], now)
+        except (NoPlanError, KeyError) as exc:
+            self._count(f"no plan for {order_id}: {exc!r}")
+            return None
+        tracked.order_id, tracked.lost, tracked.offset = order_id, None, 0
+        return plan
+
+    def ended(self, vehicle: LiveVehicle, now: float) -> None:
+        """The vehicle's order is over (finished, failed, cancelled): forget the rest of it."""
+        tracked = self.tracked.get(name(vehicle))
+        if tracked is not None:
+            tracked.lost = None
+        if tracked is None or tracked.order_id is None:
+            return
+        state = vehicle.state
+        manager = self.managers[tracked.map_id]
+        v = manager.vehicle(name(vehicle))
+        tracked.order_id = None
+        if v.passed != len(v.route) - 1 and state is not None and tracked.static is None:
+            self._reset(tracked, state.last_node_id, now)  # stopped mid-route: free the rest
+
+    def controls(self, vehicle: LiveVehicle, order_id: str) -> bool:
+        """Whether the traffic manager releases `order_id` of this vehicle."""
+        tracked = self.tracked.get(name(vehicle))
+        return tracked is not None and tracked.order_id == order_id
+
+    def route(self, vehicle: LiveVehicle) -> tuple[list[str], int, list[int]]:
+        """The vehicle's planned route (node ids), its released base end and its goal indices."""
+        tracked = self.tracked[name(vehicle)]
+        manager = self.managers[tracked.map_id]
+        v = manager.vehicle(name(vehicle))
+        ids = manager.layout.node_ids
+        return [ids[n] for n in v.route], v.base, [s for s in v.stops if s < len(v.route)]
+
+    def first_window(
+        self, vehicle: LiveVehicle, execution: OrderExecution, map_id: str, max_nodes: int | None
+    ) -> Window | None:
+        """Plan a new execution (its route becomes the plan) and the window of its first
+        message; None when no plan exists now (the order waits for the next sync)."""
+        goals = [execution.route[i] for i in execution.stop_indices]
+        plan = self.start(vehicle, execution.vda_order_id, map_id, goals, time.monotonic())
+        if plan is None:
+            return None
+        execution.route = list(plan.nodes)
+        execution.move_stops(plan.stops)
+        return window(len(plan.nodes), 0, plan.base_end, max_nodes)
+
+    def next_window(
+        self, vehicle: LiveVehicle, execution: OrderExecution, max_nodes: int | None
+    ) -> Window | None:
+        """The window of an update extending the base to what traffic released, or None.
+
+        The route beyond the sent base may have been re-planned: the execution takes the new
+        one (the base, indices up to `released_until`, never changes)."""
+        route, base, stops = self.route(vehicle)
+        offset = self.tracked[name(vehicle)].offset
+        if offset:  # re-adopted: the plan continues the order from its decision point
+            route = execution.route[:offset] + route
+            base, stops = base + offset, [s + offset for s in stops]
+        first = execution.released_until
+        if base <= first:
+            return None
+        execution.route = route
+        # A re-plan keeps only the goals still ahead: they are the last stops of the order.
+        current = execution.stop_indices
+        if 0 < len(stops) <= len(current):
+            execution.move_stops(current[: len(current) - len(stops)] + stops)
+        extension = window(len(route), first, base, max_nodes)
+        return extension if extension.released > first else None
+
+    def tick(self, now: float) -> None:
+        """About once a second: block vehicles that went offline, re-time and re-plan."""
+        for tracked in self.tracked.values():
+            vehicle = tracked.vehicle
+            if tracked.static is None and vehicle.session.link(now) is not Link.ONLINE:
+                self._mode_change(tracked, "offline", vehicle.state, now)  # type: ignore[arg-type]
+        for manager in self.managers.values():
+            manager.tick(now)
+
+    # -- for the live page ----------------------------------------------------------------------
+
+    def waiting_for(self, vehicle: LiveVehicle) -> list[str]:
+        """Serial numbers of the vehicles this one waits for at its decision point."""
+        tracked = self.tracked.get(name(vehicle))
+        if tracked is None:
+            return []
+        others = self.managers[tracked.map_id].waiting_for(name(vehicle))
+        return [self.tracked[o].vehicle.serial_number for o in others if o in self.tracked]
+
+    def reserved(self, vehicle: LiveVehicle) -> list[str]:
+        """The node ids the vehicle has planned but not yet released (its reservations)."""
+        tracked = self.tracked.get(name(vehicle))
+        if tracked is None or tracked.order_id is None:
+            return []
+        route, base, _ = self.route(vehicle)
+        return route[base + 1 :]
+
+    def safety(self, now: float) -> dict[str, int]:
+        """The safety net's counters: wait-for cycles and stalled vehicles (both must stay 0)."""
+        cycles = sum(len(m.wait_cycles()) for m in self.managers.values())
+        stalled = sum(len(m.stalled(now)) for m in self.managers.values())
+        return {"cycles": cycles, "stalled": stalled}
+
+
+def name(vehicle: LiveVehicle) -> str:
+    """The traffic manager's id of a vehicle."""
+    return f"{vehicle.manufacturer}/{vehicle.serial_number}"
