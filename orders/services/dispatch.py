@@ -23,6 +23,7 @@ from orders.conf import setting
 from orders.models import OrderEvent, OrderSequence, OrderStep, TransportOrder
 from orders.services.events import dispatch_on_commit, record, transition
 from orders.services.vehicle_events import emit_vehicle_order_event
+from orders.services.webhooks import subscriptions_read_once
 from robots.models import Vehicle
 from traffic import NoRouteError, RoutingGraph, VehicleProfile
 
@@ -59,7 +60,8 @@ def dispatch_pending_orders(*, now: datetime | None = None) -> list[TransportOrd
                 notes[order.pk] = gate.waiting[order.pk]
             else:
                 ready.append(order)
-        assigned = _assign_ready(ready, notes, now, gate)
+        with subscriptions_read_once():
+            assigned = _assign_ready(ready, notes, now, gate)
         _save_notes(pending, notes)
     return assigned
 

@@ -267,3 +267,25 @@ def test_users_that_are_not_clients_cannot_subscribe(db, demo_map) -> None:
     staff.force_authenticate(get_user_model().objects.create_user("staff"))
 
     assert staff.get("/api/v1/webhooks/").status_code == 403
+
+
+def test_a_dispatch_cycle_reads_the_subscriptions_once_however_many_it_assigns(
+    station, subscription
+) -> None:
+    from django.db import connection
+    from django.test.utils import CaptureQueriesContext
+
+    for node in ("A0.3", "A1.3", "A2.3"):
+        VehicleFactory(last_node_id=node)
+    for pick in ("PICK-1", "PICK-2", "PICK-3"):
+        services.create_transport_order(source=station(pick), destination=station("DROP-1"))
+    WebhookDelivery.objects.all().delete()
+
+    with CaptureQueriesContext(connection) as queries:
+        assigned = services.dispatch_pending_orders()
+
+    assert len(assigned) == 3
+    reads = [q["sql"] for q in queries if 'FROM "orders_webhooksubscription"' in q["sql"]]
+    assert len(reads) == 1
+    # ...and every assignment still produced its two events for the subscriber.
+    assert WebhookDelivery.objects.filter(subscription=subscription).count() == 6
