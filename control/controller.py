@@ -138,6 +138,8 @@ class Controller:
                     return
             try:
                 handler(self, vehicle, message)
+                if topic.kind == TopicKind.FACTSHEET and raw is not message:
+                    vehicle.keep_battery_charging(raw)  # 3.0 only: adapted away otherwise
                 self.distribution.after_message(vehicle, topic.kind, raw)
             except Exception:  # one bad robot never stops the fleet
                 self.counters["handler_errors"] += 1

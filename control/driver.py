@@ -9,7 +9,7 @@ import time
 from collections.abc import Callable
 
 import vda5050
-from control.capabilities import sends_max_speed
+from control.capabilities import loaded_speed_limit, sends_max_speed
 from control.execution import LayoutIndex, OrderExecution, Phase, Progress, Window
 from control.live import LiveVehicle
 from control.order_messages import (
@@ -228,6 +228,7 @@ class OrderDriver:
             window,
             job,
             max_speed=sends_max_speed(vehicle.capabilities),
+            loaded_speed=loaded_speed_limit(vehicle.factsheet, order.load_type),
         )
         try:
             self.publisher.order(

@@ -100,6 +100,18 @@ class LiveVehicle:
         self.mark_changed()
         return reconnected
 
+    def keep_battery_charging(self, raw: Any) -> None:
+        """Keep a 3.0 factsheet's `batteryCharging` (no 2.x field holds it) in the stored
+        factsheet under `vehicleConfig`: dispatch gives a vehicle below its
+        `criticalLowChargingLevel` no transport orders (REFERENCE J.46)."""
+        config = getattr(raw, "mobile_robot_configuration", None)
+        charging = getattr(config, "battery_charging", None)
+        if self.factsheet is None or charging is None:
+            return
+        vehicle_config = dict(self.factsheet.get("vehicleConfig") or {})
+        vehicle_config["batteryCharging"] = msgspec.to_builtins(charging)
+        self.factsheet["vehicleConfig"] = vehicle_config
+
     def apply_factsheet(self, message: vda5050.Factsheet) -> None:
         self.factsheet = msgspec.to_builtins(message)
         self.capabilities = Capabilities.from_factsheet(message)

@@ -61,6 +61,7 @@ def build_order(
     job: LoadJob,
     *,
     max_speed: bool = False,
+    loaded_speed: float | None = None,
 ) -> tuple[list[vda5050.Node], list[vda5050.Edge]]:
     """The nodes and edges of route indices window.first..window.last.
 
@@ -68,9 +69,12 @@ def build_order(
     exactly what was sent before (same id, sequence id and actions). Each step of the order is a
     HARD blocking node action at its stop (pick, drop or a custom action), so the vehicle stands
     still while handling the load. With `max_speed`
-    each edge carries its speed limit after zones, where it has one.
+    each edge carries its speed limit after zones, where it has one, and edges driven with the
+    load on board (after a pick, before its drop) at most `loaded_speed`, the factsheet load
+    set's `agvSpeedLimit` (REFERENCE J.46).
     """
     route = execution.route
+    carrying = _loaded_edges(execution) if loaded_speed is not None else set()
     nodes: list[vda5050.Node] = []
     edges: list[vda5050.Edge] = []
     for index in range(window.first, window.last + 1):
@@ -80,7 +84,12 @@ def build_order(
             edges.append(
                 vda5050.Edge(
                     edge_id=edge_id,
-                    max_speed=layout.speed_limits.get(edge_id) if max_speed else None,
+                    max_speed=_edge_speed(
+                        layout.speed_limits.get(edge_id),
+                        loaded_speed if index in carrying else None,
+                    )
+                    if max_speed
+                    else None,
                     sequence_id=2 * index - 1,
                     released=released,  # both ends released: the earlier one is
                     start_node_id=route[index - 1],
@@ -101,6 +110,27 @@ def build_order(
             )
         )
     return nodes, edges
+
+
+def _loaded_edges(execution: OrderExecution) -> set[int]:
+    """Route indices whose incoming edge is driven with a load on board."""
+    loaded: set[int] = set()
+    carrying, previous = False, 0
+    for number, step in enumerate(execution.steps):
+        index = execution.stop_index(number)
+        if carrying:
+            loaded.update(range(previous + 1, index + 1))
+        if step.action_type == "pick":
+            carrying = True
+        elif step.action_type == "drop":
+            carrying = False
+        previous = index
+    return loaded
+
+
+def _edge_speed(limit: float | None, loaded: float | None) -> float | None:
+    given = [speed for speed in (limit, loaded) if speed is not None]
+    return min(given) if given else None
 
 
 def _node_actions(execution: OrderExecution, index: int, job: LoadJob) -> list[vda5050.Action]:

@@ -59,11 +59,68 @@ def with_height(profile: VehicleProfile, factsheet: Factsheet) -> VehicleProfile
     return replace(profile, height=height)
 
 
-def refusal(factsheet: Factsheet, *, load_type: str, actions: Iterable[str]) -> str | None:
-    """Why the vehicle cannot do an order with `load_type` and node `actions`, or None."""
+def _positive(value: Any) -> float | None:
+    if isinstance(value, int | float) and not isinstance(value, bool) and value > 0:
+        return float(value)
+    return None
+
+
+def _load_set(factsheet: Factsheet, load_type: str) -> Mapping[str, Any] | None:
+    sets = ((factsheet or {}).get("loadSpecification") or {}).get("loadSets") or []
+    return next(
+        (
+            s
+            for s in sets
+            if isinstance(s, Mapping) and load_type and s.get("loadType") == load_type
+        ),
+        None,
+    )
+
+
+def max_load_mass(factsheet: Factsheet, load_type: str = "") -> float | None:
+    """The heaviest load (kg) the vehicle takes: `typeSpecification.maxLoadMass`, lowered by the
+    `maxWeight` of the load set for `load_type` (REFERENCE J.42, J.46); None when unstated."""
+    limits = [_positive(((factsheet or {}).get("typeSpecification") or {}).get("maxLoadMass"))]
+    load_set = _load_set(factsheet, load_type)
+    if load_set is not None:
+        limits.append(_positive(load_set.get("maxWeight")))
+    stated = [limit for limit in limits if limit is not None]
+    return min(stated) if stated else None
+
+
+def critical_charge(factsheet: Factsheet) -> float | None:
+    """The battery level (%) below which the vehicle takes only charging orders: 3.0
+    `batteryCharging.criticalLowChargingLevel`, which control keeps under `vehicleConfig`."""
+    config = (factsheet or {}).get("vehicleConfig") or {}
+    charging = config.get("batteryCharging") if isinstance(config, Mapping) else None
+    if not isinstance(charging, Mapping):
+        return None
+    return _positive(charging.get("criticalLowChargingLevel"))
+
+
+def loaded(profile: VehicleProfile | None, factsheet: Factsheet, load_type: str) -> VehicleProfile:
+    """The profile for legs with a load on board: LIF `loadRestriction` (loaded) and
+    `loadSetNames` (the factsheet's load set for `load_type`, if it names one) apply."""
+    load_set = _load_set(factsheet, load_type)
+    name = str(load_set["setName"]) if load_set is not None and load_set.get("setName") else None
+    return replace(profile or VehicleProfile(), loaded=True, load_set=name)
+
+
+def refusal(
+    factsheet: Factsheet,
+    *,
+    load_type: str,
+    actions: Iterable[str],
+    load_weight: float | None = None,
+) -> str | None:
+    """Why the vehicle cannot do an order with `load_type` (of `load_weight` kg, if known) and
+    node `actions`, or None."""
     loads = load_types(factsheet)
     if load_type and loads is not None and load_type not in loads:
         return f"load type {load_type}"
+    limit = max_load_mass(factsheet, load_type)
+    if load_weight is not None and limit is not None and load_weight > limit:
+        return f"a load of {load_weight:g} kg (at most {limit:g} kg)"
     declared = node_actions(factsheet)
     if declared is not None:
         missing = sorted(set(actions) - declared)

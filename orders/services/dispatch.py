@@ -14,14 +14,16 @@ from django.utils import timezone
 from battery import selectors as battery_selectors
 from fleet.control_queue import send_command
 from fleet.realtime import LIVE_GROUP, broadcast_on_commit
+from inventory import selectors as inventory_selectors
 from maintenance import selectors as maintenance_selectors
-from maps.models import Map, VehicleType
+from maps.models import Map
 from maps.selectors import load_graph, vehicle_profile
 from orders import capability, selectors
 from orders.assignment import Candidate, Job, plan_batch
 from orders.conf import setting
-from orders.models import OrderEvent, OrderSequence, OrderStep, TransportOrder
+from orders.models import OrderEvent, OrderSequence, TransportOrder
 from orders.services.events import dispatch_on_commit, record, transition
+from orders.services.fit import Capabilities, allowed_vehicles, order_steps, route_through_steps
 from orders.services.vehicle_events import emit_vehicle_order_event
 from orders.services.webhooks import subscriptions_read_once
 from robots.models import Vehicle
@@ -112,14 +114,16 @@ def _assign_on_map(
         pk: capability.with_height(vehicle_profile(vehicle_type=t), factsheets[pk])
         for pk, t in types.items()
     }
-    capabilities = _Capabilities(vehicles)
+    capabilities = Capabilities(
+        vehicles, inventory_selectors.load_weights(o.load_id for o in orders)
+    )
     jobs = []
     for order in orders:
-        allowed, note = _allowed_vehicles(order, vehicles, types, gate, capabilities)
+        allowed, note = allowed_vehicles(order, vehicles, types, gate, capabilities)
         if note is not None:
             notes[order.pk] = note
             continue
-        steps = _steps(order)
+        steps = order_steps(order)
         jobs.append(
             Job(
                 key=order.pk,
@@ -147,7 +151,10 @@ def _assign_on_map(
     assigned = []
     for job, candidate, _ in plan.pairs:
         order, vehicle = order_by_pk[job.key], vehicle_by_pk[candidate.key]
-        planned = _route(graph, vehicle, _steps(order), profiles.get(vehicle.pk))
+        loaded = capability.loaded(profiles.get(vehicle.pk), vehicle.factsheet, order.load_type)
+        planned = route_through_steps(
+            graph, vehicle, order_steps(order), profiles.get(vehicle.pk), loaded
+        )
         if isinstance(planned, str):
             notes[order.pk] = planned
         elif refusal := battery_selectors.job_refusal(
@@ -168,111 +175,6 @@ def _travel_times(graph: RoutingGraph, goal: str, profile: VehicleProfile) -> di
         return graph.travel_times_to(goal, vehicle=profile)
     except NoRouteError:
         return {}
-
-
-def _steps(order: TransportOrder) -> list[OrderStep]:
-    """The order's steps (prefetched); an order saved without steps is its pick → drop pair."""
-    steps = list(order.steps.all())
-    if steps:
-        return steps
-    cached: list[OrderStep] | None = getattr(order, "_pick_drop", None)
-    if cached is None:
-        cached = [
-            OrderStep(index=0, station=order.source, operation=OrderStep.Operation.PICK),
-            OrderStep(index=1, station=order.destination, operation=OrderStep.Operation.DROP),
-        ]
-        order._pick_drop = cached  # type: ignore[attr-defined]
-    return cached
-
-
-def _allowed_vehicles(
-    order: TransportOrder,
-    vehicles: list[Vehicle],
-    types: dict[int, VehicleType],
-    gate: selectors.SequenceGate,
-    capabilities: "_Capabilities",
-) -> tuple[frozenset[int] | None, str | None]:
-    """The idle vehicles that may take `order` (None: any), or why none may now."""
-    idle = capabilities.idle
-    bound = gate.vehicle_of.get(order.sequence_id) if order.sequence_id else None
-    if bound is not None:
-        if bound not in idle:
-            return None, "waits for the vehicle of its sequence to be free"
-        allowed = {bound}
-    elif order.intended_vehicle_id is not None:
-        if order.intended_vehicle_id not in idle:
-            return None, f"waits for its intended vehicle {order.intended_vehicle} to be free"
-        allowed = {order.intended_vehicle_id}
-    else:
-        allowed = idle
-    # A vehicle bound to a sequence with open orders takes no other work.
-    others = {pk for pk, sequence in gate.reserved.items() if sequence != order.sequence_id}
-    if allowed & others:
-        allowed = allowed - others
-        if not allowed:
-            return None, "the idle vehicles are reserved for order sequences"
-    if order.vehicle_type_id is not None:
-        allowed = {pk for pk in allowed if pk in types and types[pk].pk == order.vehicle_type_id}
-        if not allowed:
-            return None, f"no idle vehicle of type {order.vehicle_type}"
-    actions = frozenset(step.vda_action_type for step in _steps(order))
-    refusals = {
-        pk: reason
-        for pk, reason in capabilities.refusals(order.load_type, actions).items()
-        if pk in allowed
-    }
-    if refusals.keys() == allowed:
-        reason = sorted(set(refusals.values()))[0]
-        return None, f"no idle vehicle can handle {reason}"
-    if refusals or allowed != idle:
-        return frozenset(allowed - refusals.keys()), None
-    return None, None
-
-
-class _Capabilities:
-    """Which vehicles refuse which (load type, step actions), from their factsheets: read once
-    per cycle and cached per distinct question (a backlog asks the same few many times)."""
-
-    def __init__(self, vehicles: list[Vehicle]) -> None:
-        # Only vehicles whose factsheet declares load sets or node actions can refuse anything.
-        self._factsheets = {
-            v.pk: v.factsheet
-            for v in vehicles
-            if capability.load_types(v.factsheet) is not None
-            or capability.node_actions(v.factsheet) is not None
-        }
-        self._cache: dict[tuple[str, frozenset[str]], dict[int, str]] = {}
-        self.idle = {v.pk for v in vehicles}
-
-    def refusals(self, load_type: str, actions: frozenset[str]) -> dict[int, str]:
-        """Vehicle pk -> what it cannot handle."""
-        key = (load_type, actions)
-        found = self._cache.get(key)
-        if found is None:
-            found = {}
-            for pk, factsheet in self._factsheets.items():
-                reason = capability.refusal(factsheet, load_type=load_type, actions=actions)
-                if reason is not None:
-                    found[pk] = reason
-            self._cache[key] = found
-        return found
-
-
-def _route(
-    graph: RoutingGraph, vehicle: Vehicle, steps: list[OrderStep], profile: VehicleProfile | None
-) -> tuple[list[str], list[int]] | str:
-    """The quickest route from the vehicle through every step's node, with each step's index in
-    it; or why there is none."""
-    route, indices = [vehicle.last_node_id], []
-    for number, step in enumerate(steps, start=1):
-        goal = step.station.node.node_id
-        try:
-            leg = graph.route_from_table(route[-1], goal, vehicle=profile).nodes
-        except NoRouteError:
-            return f"step {number} ({step.station.station_id}) cannot be reached by {vehicle}"
-        route += leg[1:]
-        indices.append(len(route) - 1)
-    return route, indices
 
 
 def _assign(
@@ -318,9 +220,15 @@ def _assign(
 
 
 def _hold_back(fleet: selectors.DispatchFleet) -> None:
-    """Move idle vehicles that charge, need charge or are out of service to `unavailable`."""
+    """Move idle vehicles that charge, need charge, are below the critical charge level their
+    factsheet states (3.0, REFERENCE J.46) or are out of service to `unavailable`."""
     holds = battery_selectors.dispatch_holds(vehicles=fleet.idle)
     holds |= maintenance_selectors.out_of_service(vehicle_ids=[v.pk for v in fleet.idle])
+    for vehicle in fleet.idle:  # below its factsheet's critical level: charging orders only
+        critical = capability.critical_charge(vehicle.factsheet)
+        charge = vehicle.battery_charge
+        if critical is not None and charge is not None and charge < critical:
+            holds.setdefault(vehicle.pk, "below its critical charge level")
     for reason in holds.values():
         fleet.unavailable[reason.split(" (")[0].split(":")[0]] += 1
     fleet.idle = [v for v in fleet.idle if v.pk not in holds]
