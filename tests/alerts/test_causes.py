@@ -235,3 +235,35 @@ def test_due_maintenance_raises_until_work_starts(make_harness) -> None:
     harness.step(1)
     assert open_alerts(Source.MAINTENANCE) == []
     assert len(alerts(Source.MAINTENANCE)) == 1
+
+
+def test_a_service_plan_fired_by_simulated_driving_raises_a_maintenance_alert(
+    make_harness,
+) -> None:
+    from maintenance import services as maintenance
+    from maintenance.models import ServicePlan, WorkOrder
+    from maintenance.services.observe import OBSERVER
+
+    OBSERVER.tracks.clear()  # the counters' memory belongs to this test's vehicles
+    harness = make_harness()
+    ServicePlan.objects.create(name="Wheel check", interval_km=0.01)  # every 10 m driven
+    assert maintenance.check_service_plans() == []  # the baseline: nothing driven yet
+    order = _order(harness)
+
+    harness.run_until(
+        lambda: TransportOrder.objects.get(pk=order.pk).status == TransportOrder.Status.FINISHED,
+        limit=240,
+    )
+    OBSERVER.flush_all()  # the counters the simulated drive added
+    (work,) = maintenance.check_service_plans()  # as beat runs it
+    assert work.status == WorkOrder.Status.DUE
+    floor.LATE_CHECK_SECONDS = 0
+    harness.step(1)
+    harness.step(1)
+    (alert,) = open_alerts(Source.MAINTENANCE)
+    assert alert.vehicle.serial_number == "AGV-1"
+    assert work.title in alert.message, alert.message
+
+    maintenance.advance_work_order(work_order=work, status="IN_PROGRESS")
+    harness.step(1)
+    assert open_alerts(Source.MAINTENANCE) == []
