@@ -11,7 +11,6 @@ with the other protocol limits (`control.limits` checks them before anything is 
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import vda5050
 from vda5050.enums import ActionScope
@@ -133,16 +132,4 @@ def refuse_instant_action(
     unknown = sorted(set(parameters) - declared.keys())
     if unknown:
         return f"{action_type} does not take parameters {', '.join(unknown)}"
-    return None
-
-
-def loaded_speed_limit(factsheet: dict[str, Any] | None, load_type: str) -> float | None:
-    """The speed (m/s) the vehicle may drive with a load of `load_type` on board: the
-    `agvSpeedLimit` of the factsheet's load set for that type (REFERENCE J.46), or None."""
-    sets = ((factsheet or {}).get("loadSpecification") or {}).get("loadSets") or []
-    for load_set in sets:
-        if isinstance(load_set, dict) and load_type and load_set.get("loadType") == load_type:
-            speed = load_set.get("agvSpeedLimit")
-            if isinstance(speed, int | float) and not isinstance(speed, bool) and speed > 0:
-                return float(speed)
     return None

@@ -9,7 +9,7 @@ import time
 from collections.abc import Callable
 
 import vda5050
-from control.capabilities import loaded_speed_limit, sends_max_speed
+from control.capabilities import sends_max_speed
 from control.execution import LayoutIndex, OrderExecution, Phase, Progress, Window
 from control.live import LiveVehicle
 from control.order_messages import (
@@ -23,6 +23,7 @@ from control.ports import ActiveOrder
 from control.publisher import ProtocolLimitError, Publisher
 from control.session import Link
 from control.traffic_link import TrafficLink
+from orders import capability
 
 logger = logging.getLogger(__name__)
 
@@ -228,7 +229,7 @@ class OrderDriver:
             window,
             job,
             max_speed=sends_max_speed(vehicle.capabilities),
-            loaded_speed=loaded_speed_limit(vehicle.factsheet, order.load_type),
+            loaded_speed=capability.loaded_speed(vehicle.factsheet, order.load_type),
         )
         try:
             self.publisher.order(

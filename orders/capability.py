@@ -44,10 +44,7 @@ def series_name(factsheet: Factsheet) -> str:
 def height_max(factsheet: Factsheet) -> float | None:
     """The vehicle's highest point (`physicalParameters.heightMax`, m), or None."""
     physical = (factsheet or {}).get("physicalParameters") or {}
-    height = physical.get("heightMax") if isinstance(physical, Mapping) else None
-    if isinstance(height, int | float) and not isinstance(height, bool) and height > 0:
-        return float(height)
-    return None
+    return _positive(physical.get("heightMax")) if isinstance(physical, Mapping) else None
 
 
 def with_height(profile: VehicleProfile, factsheet: Factsheet) -> VehicleProfile:
@@ -86,6 +83,13 @@ def max_load_mass(factsheet: Factsheet, load_type: str = "") -> float | None:
         limits.append(_positive(load_set.get("maxWeight")))
     stated = [limit for limit in limits if limit is not None]
     return min(stated) if stated else None
+
+
+def loaded_speed(factsheet: Factsheet, load_type: str) -> float | None:
+    """The speed (m/s) allowed with a load of `load_type` on board: the `agvSpeedLimit` of the
+    factsheet's load set for that type (REFERENCE J.46), or None."""
+    load_set = _load_set(factsheet, load_type)
+    return None if load_set is None else _positive(load_set.get("agvSpeedLimit"))
 
 
 def critical_charge(factsheet: Factsheet) -> float | None:
