@@ -265,6 +265,10 @@ USE_TZ = True
 STATIC_URL = "static/"
 STATIC_ROOT = BASE_DIR / "staticfiles"
 STATICFILES_DIRS = [BASE_DIR / "static"]
+# Uploaded files (floor plans, work-order attachments). Served only to logged-in staff by
+# fleet.media, never as public static files; back this directory up with the database.
+MEDIA_ROOT = env.path("MEDIA_ROOT", default=BASE_DIR / "media")
+MEDIA_URL = "/media/"
 
 LOGGING = {
     "version": 1,

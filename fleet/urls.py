@@ -3,13 +3,14 @@
 from django.contrib import admin
 from django.urls import include, path
 
-from fleet import views
+from fleet import media, views
 
 urlpatterns = [
     path("admin/", admin.site.urls),
     path("accounts/", include("django.contrib.auth.urls")),  # login for staff who are not admins
     path("audit/", views.audit_page, name="audit"),
     path("audit.csv", views.audit_csv, name="audit-csv"),
+    path("media/<path:name>", media.media_file, name="media"),
     path("api/v1/", include("fleet.api_urls")),
     path("layouts/", include("maps.urls")),
     path("reports/", include("reports.urls")),
