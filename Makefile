@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint format venv browser clean bench-ingest bench-dispatch bench-routing bench-energy bench-reports bench-traffic bench-traffic-control
+.PHONY: bench-faults demo test lint format venv browser clean bench-ingest bench-dispatch bench-routing bench-energy bench-reports bench-traffic bench-traffic-control bench-load
 
 $(STAMP): requirements.txt requirements-dev.txt
 	@command -v $(PYTHON) >/dev/null || { echo "Python 3.11 is required ($(PYTHON) not found)"; exit 1; }
@@ -53,6 +53,16 @@ bench-reports: $(STAMP)  ## report pages over 30 days of 100 vehicles (bench/res
 
 bench-traffic-control: $(STAMP)  ## release decisions inside control, simulated vehicles (bench/results/traffic_control.json)
 	DJANGO_SETTINGS_MODULE=fleet.settings $(PY) -m bench.traffic_control $(BENCH_ARGS)
+
+bench-load: $(STAMP)  ## 1,000 vehicles against the real processes, 120 s (bench/results/load.json, docs/LOAD.md)
+	nice -n 5 $(PY) -m bench.load $(BENCH_ARGS)
+
+bench-faults: $(STAMP)  ## the fault suite, each row on its own services (bench/results/faults_*.json; BENCH_ARGS="broker --full")
+	$(PY) -m bench.faults $(BENCH_ARGS)
+
+.PHONY: bench-live-map
+bench-live-map: $(STAMP)  ## the live map with 1,000 vehicles in headless Chromium; needs REDIS_URL (bench/results/live_map.json)
+	nice -n 5 $(PY) -m bench.live_map $(BENCH_ARGS)
 
 bench-traffic: $(STAMP)  ## SIPP + ADG traffic in simulation, S1-S3 (bench/results/traffic_s*.json)
 	$(PY) -m bench.traffic $(BENCH_ARGS)

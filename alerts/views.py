@@ -1,17 +1,18 @@
 """Pages of the alerts app: the list (acknowledge/resolve with a comment) and the banner feed."""
 
 from django.contrib import messages
-from django.contrib.auth.decorators import login_required
 from django.http import HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import redirect, render
 from django.views.decorators.http import require_POST
 
 from alerts import selectors, services
 from alerts.models import Alert, Severity, Source
+from fleet import roles
+from fleet.access import require_permission
 from fleet.exceptions import DomainError
 
 
-@login_required
+@require_permission(roles.VIEW_OPERATIONS)
 def alert_list(request: HttpRequest) -> HttpResponse:
     show = request.GET.get("show", "open")
     alerts = selectors.open_alerts() if show == "open" else Alert.objects.select_related("vehicle")
@@ -21,6 +22,11 @@ def alert_list(request: HttpRequest) -> HttpResponse:
     severity = request.GET.get("severity", "")
     if severity in Severity.values:
         alerts = alerts.filter(severity=severity)
+    if show in Alert.Status.values:  # one state: OPEN (unacknowledged), ACKNOWLEDGED, RESOLVED
+        alerts = alerts.filter(status=show)
+    vehicle = request.GET.get("vehicle", "").strip()[:100]
+    if vehicle:
+        alerts = alerts.filter(vehicle__serial_number__icontains=vehicle)
     return render(
         request,
         "alerts/list.html",
@@ -31,12 +37,14 @@ def alert_list(request: HttpRequest) -> HttpResponse:
             "severities": Severity.choices,
             "source": source,
             "severity": severity,
+            "states": Alert.Status.choices,
+            "vehicle": vehicle,
         },
     )
 
 
-@login_required
 @require_POST
+@require_permission(roles.ACKNOWLEDGE_ALERTS)
 def alert_action(request: HttpRequest, pk: str, action: str) -> HttpResponse:
     comment = request.POST.get("comment", "")[:2000]
     try:
@@ -49,7 +57,7 @@ def alert_action(request: HttpRequest, pk: str, action: str) -> HttpResponse:
     return redirect(request.POST.get("next") or "alerts:list")
 
 
-@login_required
+@require_permission(roles.VIEW_OPERATIONS)
 def banner(request: HttpRequest) -> JsonResponse:
     """Polled by the banner script in base.html every few seconds."""
     return JsonResponse(selectors.banner())

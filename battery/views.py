@@ -1,16 +1,17 @@
 """Staff pages of the battery app: the fleet's batteries, chargers and queue; one vehicle's
-history. Login required; changes to chargers and policies are made in the admin."""
+history. They need VIEW_OPERATIONS; chargers and policies are changed in the admin."""
 
-from django.contrib.auth.decorators import login_required
 from django.http import HttpRequest, HttpResponse
 from django.shortcuts import get_object_or_404, render
 
 from battery import selectors
 from battery.models import Charger, ChargeSession, VehicleEnergy
+from fleet import roles
+from fleet.access import require_permission
 from robots.models import Vehicle
 
 
-@login_required
+@require_permission(roles.VIEW_OPERATIONS)
 def overview(request: HttpRequest) -> HttpResponse:
     return render(
         request,
@@ -26,7 +27,7 @@ def overview(request: HttpRequest) -> HttpResponse:
     )
 
 
-@login_required
+@require_permission(roles.VIEW_OPERATIONS)
 def vehicle_detail(request: HttpRequest, pk: int) -> HttpResponse:
     vehicle = get_object_or_404(Vehicle, pk=pk)
     samples = list(selectors.battery_history(vehicle=vehicle, limit=300))

@@ -35,14 +35,23 @@ def run(vehicles: int, days: int, repeat: int) -> dict[str, Any]:
     from django.test import Client
     from django.utils import timezone
 
+    from fleet.roles import MANAGER, assign_role
     from reports.history import generate_history
-    from reports.models import LeadTimeCount, VehicleHour
+    from reports.models import (
+        LeadTimeCount,
+        VehicleHour,
+        WaitDayCount,
+        WaitHourCount,
+        WaitNodeDay,
+    )
 
     began = time.perf_counter()
     orders = generate_history(vehicles=vehicles, days=days)
     generate_s = time.perf_counter() - began
     client = Client()
-    client.force_login(get_user_model().objects.create_user("bench-manager"))
+    manager = get_user_model().objects.create_user("bench-manager")
+    assign_role(user=manager, role=MANAGER)  # reports need fleet.view_reports
+    client.force_login(manager)
     today = timezone.localdate()
     month = f"start={today - timedelta(days=days)}&end={today}"
     week = f"start={today - timedelta(days=6)}&end={today}"
@@ -59,6 +68,12 @@ def run(vehicles: int, days: int, repeat: int) -> dict[str, Any]:
         "page_30_days_one_vehicle": timed(client.get, f"/reports/?{month}&vehicles=1", repeat),
         "csv_throughput_30_days": timed(client.get, f"/reports/throughput.csv?{month}", repeat),
         "csv_utilisation_30_days": timed(client.get, f"/reports/utilisation.csv?{month}", repeat),
+        "csv_waits_vehicles_30_days": timed(
+            client.get, f"/reports/waits_vehicles.csv?{month}", repeat
+        ),
+        "wait_rows": WaitHourCount.objects.count()
+        + WaitDayCount.objects.count()
+        + WaitNodeDay.objects.count(),
     }
 
 
@@ -87,14 +102,15 @@ def main() -> None:
     print(
         f"{figures['vehicles']} vehicles, {figures['days']} days on {figures['database']}: "
         f"{figures['orders']:,} orders, {figures['hour_rows']:,} hourly and "
-        f"{figures['lead_time_rows']:,} lead-time rows (written in {figures['generate_s']} s)"
+        f"{figures['lead_time_rows']:,} lead-time and {figures['wait_rows']:,} traffic-wait rows "
+        f"(written in {figures['generate_s']} s)"
     )
     for name in ("page_30_days", "page_7_days", "page_30_days_one_vehicle"):
         t = figures[name]
         print(
             f"{name}: p50 {t['p50_ms']} ms, p95 {t['p95_ms']} ms, max {t['max_ms']} ms (< 500 ms)"
         )
-    for name in ("csv_throughput_30_days", "csv_utilisation_30_days"):
+    for name in ("csv_throughput_30_days", "csv_utilisation_30_days", "csv_waits_vehicles_30_days"):
         t = figures[name]
         print(f"{name}: p50 {t['p50_ms']} ms, p95 {t['p95_ms']} ms")
     from bench import results

@@ -24,16 +24,20 @@ from control.distribution import Distribution
 from control.driver import OrderDriver
 from control.execution import LayoutIndex
 from control.live import Fleet, InstantActionTrack, LiveVehicle
+from control.message_log import IN, MessageLog
 from control.ports import ActiveOrder, FlushBatch, Store
 from control.publisher import ProtocolLimitError, Publish, Publisher
 from control.session import Verdict
 from control.traffic_link import TrafficLink
 from control.versions import to_model, wire_version
+from control.wait_log import WaitLog
 from vda5050 import DecodeError, decode
 from vda5050.enums import TopicKind
 from vda5050.topics import Topic, TopicError
 
 logger = logging.getLogger(__name__)
+
+TOPIC_CACHE_SIZE = 20_000  # parsed topics kept: 4 inbound kinds for 5,000 vehicles
 
 
 _VEHICLE_COMMANDS: dict[str, tuple[str, dict[str, Any]]] = {
@@ -63,12 +67,16 @@ class Controller:
         self.fleet = Fleet()
         self.layouts: dict[str, LayoutIndex] = {}
         self.counters: Counter[str] = Counter()
-        self.publisher = Publisher(publish, self.counters)
+        self._topics: dict[str, Topic] = {}  # topic text -> parsed (see _parse_topic)
+        # Raw messages both ways for the vehicle page (control.message_log; watched ones stream).
+        self.messages = MessageLog()
+        self.publisher = Publisher(publish, self.counters, messages=self.messages)
         self.lock = threading.RLock()
         self._unflushed_outcomes: list[InstantActionTrack] = []  # from a failed flush
         self._job_requests: list[dict[str, Any]] = []  # the flush opens charge sessions, moves
         # Traffic management releases bases; off: a fixed `base_ahead` (single-vehicle sites).
         self.traffic = TrafficLink(lambda: list(self.fleet.vehicles.values())) if traffic else None
+        self.waits = WaitLog()  # traffic waits as episodes, for the reports (control.wait_log)
         self.driver = OrderDriver(
             self.publisher, lambda: self.layouts, base_ahead=base_ahead, traffic=self.traffic
         )
@@ -100,7 +108,7 @@ class Controller:
         """
         self.counters["messages"] += 1
         try:
-            topic = Topic.parse(topic_text)
+            topic = self._topics.get(topic_text) or self._parse_topic(topic_text)
         except TopicError as exc:
             self._reject("bad_topic", topic_text, exc)
             return
@@ -118,6 +126,8 @@ class Controller:
                 raw = decode(topic.kind, payload, version=version)
                 message = to_model(topic.kind, raw)
             except DecodeError as exc:
+                if known is not None:
+                    self.messages.record(known.key, IN, topic.kind, payload, note=str(exc)[:200])
                 self._reject("decode_errors", topic_text, exc, known)
                 return
             if (message.manufacturer, message.serial_number) != (
@@ -130,6 +140,7 @@ class Controller:
             vehicle = known or self.fleet.get_or_add(
                 topic.manufacturer, topic.serial_number, topic.interface_name
             )
+            self.messages.record(vehicle.key, IN, topic.kind, payload)
             if topic.kind != TopicKind.CONNECTION and message.header_id is not None:
                 verdict = vehicle.session.check_header(topic.kind, message.header_id)
                 if verdict is not Verdict.APPLY:
@@ -144,6 +155,15 @@ class Controller:
             except Exception:  # one bad robot never stops the fleet
                 self.counters["handler_errors"] += 1
                 logger.exception("handler failed for %s", topic_text)
+
+    def _parse_topic(self, topic_text: str) -> Topic:
+        """Parse and remember a valid topic: a fleet has a few topics per vehicle, and parsing
+        (five levels checked by regex) was a third of the cost of a state message."""
+        topic = Topic.parse(topic_text)
+        if len(self._topics) >= TOPIC_CACHE_SIZE:
+            self._topics.clear()  # made-up valid topics must not grow it without bound
+        self._topics[topic_text] = topic
+        return topic
 
     def on_state(self, vehicle: LiveVehicle, state: vda5050.State) -> None:
         if vehicle.apply_state(state, received_at=datetime.now(UTC)):
@@ -218,6 +238,9 @@ class Controller:
         kind = command.get("kind", "")
         if kind.startswith(("order.", "maps.")):
             return  # the loop re-reads orders (and, for maps., releases) from the database
+        if kind == "vehicle.watch":  # a vehicle page is open: stream its raw messages
+            self.watch_vehicle(command)
+            return
         action_type, parameters = _VEHICLE_COMMANDS.get(kind, (None, {}))
         if kind == "vehicle.instant_action":
             action_type, parameters = command.get("action_type"), command.get("parameters") or {}
@@ -307,6 +330,8 @@ class Controller:
                 if available and not vehicle.was_available:
                     batch.newly_available += 1
                 vehicle.was_available = available
+                if self.traffic is not None:
+                    self.waits.observe(vehicle, self.traffic.waiting_for(vehicle))
                 batch.command_outcomes += vehicle.command_outcomes
                 vehicle.command_outcomes = []
                 if not vehicle.needs_flush:
@@ -319,6 +344,7 @@ class Controller:
                 if vehicle.factsheet_changed and vehicle.factsheet is not None:
                     batch.factsheets[vehicle.pk] = vehicle.factsheet
                     vehicle.factsheet_changed = False
+            batch.traffic_waits = self.waits.take_finished()
         return batch
 
     def flush(self) -> None:
@@ -331,6 +357,7 @@ class Controller:
             or batch.factsheets
             or batch.command_outcomes
             or batch.job_requests
+            or batch.traffic_waits
         ):
             return
         try:
@@ -351,6 +378,7 @@ class Controller:
             self.driver.progress[:0] = batch.progress
             self._unflushed_outcomes[:0] = batch.command_outcomes
             self._job_requests[:0] = batch.job_requests
+            self.waits.finished[:0] = batch.traffic_waits
             for vehicle in self.fleet.vehicles.values():
                 if vehicle.pk is None or vehicle.pk in {s["pk"] for s in batch.snapshots}:
                     vehicle.needs_flush = True
@@ -364,6 +392,36 @@ class Controller:
             for vehicle in changed:
                 vehicle.needs_broadcast = False
             return [snapshots.browser_row(v, self.layouts, self.traffic) for v in changed]
+
+    def watch_vehicle(self, command: dict[str, Any]) -> None:
+        """Stream one vehicle's messages for a while (`vehicle.watch` from a vehicle page)."""
+        with self.lock:
+            vehicle = self.fleet.by_pk(command.get("vehicle", -1))
+            if vehicle is None:
+                return  # not connected since control started: the page shows the snapshot
+            seconds = command.get("seconds")
+            self.messages.watch(
+                vehicle.key,
+                seconds=float(seconds) if isinstance(seconds, int | float) else 30.0,
+                full=bool(command.get("full")),
+            )
+
+    def collect_watched(self) -> list[tuple[int, dict[str, Any]]]:
+        """Per watched vehicle (pk): its new raw messages and its browser row, to stream."""
+        with self.lock:
+            events = []
+            for batch in self.messages.collect():
+                vehicle = self.fleet.vehicles.get(batch.key)
+                if vehicle is None or vehicle.pk is None:
+                    continue
+                payload: dict[str, Any] = {
+                    "vehicle": snapshots.browser_row(vehicle, self.layouts, self.traffic),
+                    "messages": batch.messages,
+                }
+                if batch.latest is not None:
+                    payload["latest"] = batch.latest
+                events.append((vehicle.pk, payload))
+            return events
 
     def all_browser_rows(self) -> list[dict[str, Any]]:
         with self.lock:

@@ -16,6 +16,7 @@ from typing import Any
 from django.contrib.auth import get_user_model
 from django.db import close_old_connections
 
+from fleet import roles
 from maps.demo import warehouse_layout
 from maps.models import Map, Station
 from maps.services import create_layout
@@ -25,14 +26,19 @@ from orders.services import create_transport_order
 logger = logging.getLogger(__name__)
 
 DEMO_USER, DEMO_PASSWORD = "admin", "admin"  # noqa: S105 (printed for the demo's local login)
+# One login per role to try the permissions (user name = password = role; local demo only).
+DEMO_ROLE_USERS = (roles.OPERATOR, roles.TECHNICIAN, roles.MANAGER)
 
 
 def ensure_demo_data() -> Map:
-    """The demo layout and a superuser to log in with, created once."""
+    """The demo layout, a superuser to log in with and one user per role, created once."""
     layout = Map.objects.filter(map_id="demo").first() or create_layout(spec=warehouse_layout())
     users = get_user_model().objects
     if not users.filter(username=DEMO_USER).exists():
         users.create_superuser(DEMO_USER, "admin@example.invalid", DEMO_PASSWORD)
+    for role in DEMO_ROLE_USERS:
+        if not users.filter(username=role).exists():
+            roles.assign_role(user=users.create_user(role, password=role), role=role)
     return layout
 
 

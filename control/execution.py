@@ -296,6 +296,13 @@ class OrderExecution:
         return []
 
     def _rejection(self, state: vda5050.State) -> list[Progress]:
+        if self.phase is Phase.RUNNING:
+            # The vehicle took this order and now lists another one or none: it dropped it
+            # (e.g. rebooted mid-order). Nothing would ever finish it, so it fails with the
+            # reason instead of staying in progress forever (bench/faults link row).
+            self.phase = Phase.DONE
+            reason = f"vehicle no longer has the order (reports {state.order_id or 'none'!r})"
+            return [Progress("failed", self.transport_order_id, {"reason": reason})]
         rejected = self._rejection_error(state) if self.phase is Phase.SENT else None
         if rejected is None:
             return []

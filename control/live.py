@@ -6,7 +6,7 @@ broadcaster into browser snapshots.
 
 import time
 from dataclasses import dataclass, field, replace
-from datetime import datetime
+from datetime import UTC, datetime
 from typing import Any
 
 import msgspec
@@ -197,7 +197,13 @@ class Fleet:
 
 def _skew(timestamp: str, received_at: datetime) -> float | None:
     """Seconds our clock is ahead of the vehicle's (display only, never used for ordering)."""
-    try:
-        return (received_at - vda5050.parse_timestamp(timestamp)).total_seconds()
-    except vda5050.TimestampError:
-        return None
+    try:  # fast path, once per state message: Python 3.11 reads the usual forms (Z, offsets)
+        sent = datetime.fromisoformat(timestamp)
+    except (TypeError, ValueError):
+        try:  # the tolerant parser for the rest (lowercase z, odd spacing)
+            sent = vda5050.parse_timestamp(timestamp)
+        except vda5050.TimestampError:
+            return None
+    if sent.tzinfo is None:
+        sent = sent.replace(tzinfo=UTC)  # the protocol's timestamps are UTC
+    return (received_at - sent).total_seconds()

@@ -1,13 +1,17 @@
 """The database side of `control`: loading on start, assigned orders, and batched flushes."""
 
 import logging
+from collections.abc import Mapping, Sequence
 from typing import Any
 
+from django.conf import settings
 from django.db import close_old_connections, transaction
+from django.utils.module_loading import import_string
 
 from battery import selectors as battery_selectors
 from battery import services as battery_services
 from control.execution import LayoutIndex, NodePlace, Progress, StepPlan
+from control.observer import SnapshotObserver
 from control.ports import ActiveOrder, FlushBatch
 from fleet.exceptions import DomainError
 from maintenance import selectors as maintenance_selectors
@@ -26,7 +30,14 @@ logger = logging.getLogger(__name__)
 
 
 class DjangoStore:
-    """Implements `control.controller.Store` with the ORM and the apps' services."""
+    """Implements `control.controller.Store` with the ORM and the apps' services.
+
+    With an `observer` (the running `control`), the floor observation of the flushed snapshots
+    happens on the observer's thread; without one (tests, the embedded demo) inside the flush.
+    """
+
+    def __init__(self, observer: SnapshotObserver | None = None) -> None:
+        self.observer = observer
 
     def load_layouts(self) -> dict[str, LayoutIndex]:
         close_old_connections()
@@ -92,11 +103,12 @@ class DjangoStore:
         for progress in batch.progress:
             _apply(progress)
         # Alerts and inventory watch the saved snapshots after the progress (so a finished pick
-        # is in the stock before state.loads is compared); cheap, and never raises (issue 8).
-        order_floor.observe_fleet(snapshots=batch.snapshots)
-        # Battery history and maintenance counters (issue 7): sampled, never raise.
-        battery_services.observe_snapshots(snapshots=batch.snapshots)
-        maintenance_services.observe_snapshots(snapshots=batch.snapshots)
+        # is in the stock before state.loads is compared). With an observer this happens on its
+        # thread: an alert flood must not hold up order sync and publishing (issue 11).
+        if self.observer is not None:
+            self.observer.submit(batch.snapshots)
+        else:
+            observe_floor(batch.snapshots)
         for command in batch.job_requests:
             _open_job(command)
         for outcome in batch.command_outcomes:
@@ -107,6 +119,8 @@ class DjangoStore:
                     result=outcome.reason,
                     action_id="" if outcome.status == "REFUSED" else outcome.action_id,
                 )
+        if batch.traffic_waits:  # last: a failure above retries the batch without doubling them
+            _record_traffic_waits(batch.traffic_waits)
         return registered
 
     def layouts_revision(self) -> object:
@@ -128,6 +142,14 @@ class DjangoStore:
             logger.exception("could not queue dispatch; beat runs it periodically")
 
 
+def observe_floor(snapshots: Sequence[Mapping[str, Any]]) -> None:
+    """Alerts, inventory (issue 8), battery history and maintenance counters (issue 7) from
+    saved snapshots; each part logs its own failures and never raises."""
+    order_floor.observe_fleet(snapshots=snapshots)
+    battery_services.observe_snapshots(snapshots=snapshots)
+    maintenance_services.observe_snapshots(snapshots=snapshots)
+
+
 def _steps(order: TransportOrder) -> tuple[StepPlan, ...]:
     """The order's stops at the route indices dispatch recorded; none for an order assigned
     before steps existed (control then picks at the source and drops at the end)."""
@@ -144,6 +166,13 @@ def _steps(order: TransportOrder) -> tuple[StepPlan, ...]:
 # Jobs the system creates besides transport orders travel as orders with negative ids:
 # -(2·pk) for a battery charge session, -(2·pk + 1) for a maintenance move to a station.
 JOB_SOURCES = {0: "charge", 1: "park"}
+
+
+def _record_traffic_waits(episodes: list[dict[str, Any]]) -> None:
+    """Hand finished traffic waits to the recorder named in settings (the reports app)."""
+    recorder = getattr(settings, "FLEET_TRAFFIC_WAIT_RECORDER", "")
+    if recorder:
+        import_string(recorder)(episodes=episodes)
 
 
 def job_order_id(kind: str, pk: int) -> int:

@@ -40,6 +40,7 @@ class FlushBatch:
     command_outcomes: list[InstantActionTrack] = field(default_factory=list)
     newly_available: int = 0
     job_requests: list[dict[str, Any]] = field(default_factory=list)  # vehicle.charge/.park
+    traffic_waits: list[dict[str, Any]] = field(default_factory=list)  # control.wait_log
 
 
 class Store(Protocol):

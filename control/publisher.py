@@ -16,6 +16,7 @@ import msgspec
 import vda5050
 from control.limits import ProtocolLimitError, check_message
 from control.live import LiveVehicle
+from control.message_log import OUT, MessageLog
 from control.versions import to_wire
 from vda5050 import encode, v3
 from vda5050.enums import TopicKind
@@ -31,10 +32,15 @@ SENT_INSTANT_KEPT = 500  # instant action ids remembered per vehicle (3.0 cleari
 class Publisher:
     """Publishes orders and instant actions with header ids counted per vehicle and topic."""
 
-    def __init__(self, publish: Publish | None, counters: Counter[str]) -> None:
+    def __init__(
+        self, publish: Publish | None, counters: Counter[str], messages: MessageLog | None = None
+    ) -> None:
         self.publish: Publish = publish if publish is not None else _discard
+        # The fence of a standby pair (control.leader): asked right before each message goes out.
+        self.may_publish: Callable[[], bool] = _always
         self.headers = HeaderCounter()
         self.counters = counters
+        self.messages = messages  # the vehicle page's log of what we sent
 
     def order(
         self,
@@ -121,8 +127,15 @@ class Publisher:
                 )
                 self.counters["limit_refused"] += 1
                 raise
+        if not self.may_publish():
+            # Lease expired (frozen, database lost, or another process leads): sent by no one;
+            # identical resends or the next leader's adoption cover what is lost.
+            self.counters["publish_fenced"] += 1
+            return
         self.publish(topic, payload, 0)
         self.counters[f"sent_{kind}"] += 1
+        if self.messages is not None:
+            self.messages.record(vehicle.key, OUT, kind, payload)
 
 
 def _fresh_id(vehicle: LiveVehicle) -> str:
@@ -158,6 +171,10 @@ def _encode_for(
         data["instantActions"] = data.pop("actions")
         return msgspec.json.encode(data)
     return encode(message)
+
+
+def _always() -> bool:
+    return True
 
 
 def _discard(topic: str, payload: bytes, qos: int) -> None:

@@ -10,6 +10,7 @@ import paho.mqtt.client as mqtt
 
 from control import map_store
 from control.controller import Controller
+from control.leader import Leadership
 from control.ports import ActiveOrder
 from vda5050.enums import TopicKind
 
@@ -80,11 +81,17 @@ class ControlLoop:
         receive_commands: Callable[[float], list[dict[str, Any]]],
         broadcast: Callable[[list[dict[str, Any]]], None],
         intervals: dict[str, float],
+        stream_vehicle: Callable[[int, dict[str, Any]], None] | None = None,
     ) -> None:
         self.controller, self.link = controller, link
         self.receive_commands, self.broadcast = receive_commands, broadcast
+        self.stream_vehicle = stream_vehicle  # raw messages to open vehicle pages
         self.intervals = intervals
+        # Set by control.standby: the loop runs while this process leads and writes only
+        # while its lease runs (a fenced-off leader must not overwrite the new leader's rows).
+        self.leadership: Leadership | None = None
         self._stop = threading.Event()
+        self.finished = threading.Event()  # set when run() has returned (helpers stop with it)
         self._layouts_revision: object = None
 
     def stop(self) -> None:
@@ -99,7 +106,7 @@ class ControlLoop:
             ("SYNC_INTERVAL", "FLUSH_INTERVAL", "BROADCAST_INTERVAL", "REGISTRY_INTERVAL"), 0.0
         )
         try:
-            while not self._stop.is_set():
+            while not self._stop.is_set() and not self._lost():
                 commands = self._safely(self.receive_commands, 0.05) or []
                 for command in commands:
                     self._safely(self.controller.execute, command)
@@ -112,7 +119,7 @@ class ControlLoop:
                 if now >= due["REGISTRY_INTERVAL"]:
                     self._safely(self._refresh_registry)
                     due["REGISTRY_INTERVAL"] = now + self.intervals.get("REGISTRY_INTERVAL", 10.0)
-                if now >= due["FLUSH_INTERVAL"]:
+                if now >= due["FLUSH_INTERVAL"] and self._may_write():
                     self._safely(self.controller.flush)
                     self._safely(self._save_distribution)
                     due["FLUSH_INTERVAL"] = now + self.intervals["FLUSH_INTERVAL"]
@@ -120,11 +127,22 @@ class ControlLoop:
                     rows = self.controller.collect_broadcast()
                     if rows:
                         self._safely(self.broadcast, rows)
+                    if self.stream_vehicle is not None:
+                        for pk, event in self._safely(self.controller.collect_watched) or []:
+                            self._safely(self.stream_vehicle, pk, event)
                     due["BROADCAST_INTERVAL"] = now + self.intervals["BROADCAST_INTERVAL"]
         finally:
-            self._safely(self.controller.flush)
+            if self._may_write():
+                self._safely(self.controller.flush)
             self.link.stop()
+            self.finished.set()
             logger.info("control stopped; counters: %s", dict(self.controller.counters))
+
+    def _lost(self) -> bool:
+        return self.leadership is not None and self.leadership.lost.is_set()
+
+    def _may_write(self) -> bool:
+        return self.leadership is None or self.leadership.holds_lease()
 
     def _refresh_registry(self) -> None:
         """Dialects from the vehicle registry; layouts again when one was edited."""

@@ -2,6 +2,7 @@
 
 from typing import Any
 
+from control.traffic_support import vehicle_class
 from maps.selectors import get_default_map, layout_as_dict
 from orders.models import TransportOrder
 from robots.models import Vehicle
@@ -25,6 +26,7 @@ def list_vehicle_rows() -> list[dict[str, Any]]:
             "y": v.y,
             "theta": v.theta,
             "map": v.map_id,
+            "size": _footprint(v.factsheet),
             "battery": v.battery_charge,
             "mode": v.operating_mode,
             "order": v.order_id,
@@ -61,6 +63,12 @@ def list_order_rows(limit: int = 50) -> list[dict[str, Any]]:
         }
         for o in rows
     ]
+
+
+def _footprint(factsheet: dict[str, Any] | None) -> list[float]:
+    """Length and width the map draws, as control's rows give them."""
+    footprint = vehicle_class(factsheet)
+    return [round(footprint.length, 2), round(footprint.width, 2)]
 
 
 def _status(vehicle: Vehicle) -> str:

@@ -4,32 +4,54 @@ from typing import Any
 
 from django.conf import settings
 
+from control import snapshots
 from control.controller import Controller
-from control.persistence import DjangoStore
+from control.metrics import ControlMetrics, start_snapshots
+from control.observer import SnapshotObserver
+from control.persistence import DjangoStore, observe_floor
 from control.runner import ControlLoop, MqttLink
 from fleet.control_queue import receive_commands
 from fleet.mqtt import make_client
-from fleet.realtime import LIVE_GROUP, broadcast
+from fleet.realtime import LIVE_GROUP, broadcast, broadcast_json, vehicle_group
 
 
 def build_control_loop() -> ControlLoop:
     """The control loop for the configured broker and interface (not yet running)."""
+    # Alerts, inventory, battery and maintenance watch the flushed snapshots on their own
+    # thread, so an alert flood never holds up order sync and publishing (issue 11).
+    observer = SnapshotObserver(observe_floor)
     controller = Controller(
-        store=DjangoStore(),
+        store=DjangoStore(observer=observer),
         interface_name=settings.VDA5050_INTERFACE,
         base_ahead=settings.FLEET_CONTROL["BASE_AHEAD"] or None,
         traffic=settings.FLEET_CONTROL["TRAFFIC"],
     )
     client, address = make_client(settings.MQTT_URL, client_id_prefix="fleet-control")
     link = MqttLink(client, address.host, address.port, controller)
-    return ControlLoop(
+    metrics = ControlMetrics(controller)  # counted in memory, snapshots to Redis for /metrics
+    metrics.instrument(link)
+    loop = ControlLoop(
         controller,
         link,
         receive_commands=receive_commands,
         broadcast=_broadcast_vehicles,
         intervals=settings.FLEET_CONTROL,
+        stream_vehicle=_stream_vehicle,
     )
+    # One writer per term of leadership: a process that stepped down stops writing its figures.
+    start_snapshots(metrics, settings.REDIS_URL, until=loop.finished)
+    observer.start(until=loop.finished)
+    return loop
+
+
+# What the live pages were last sent per vehicle: they get only the changes (snapshots.LiveDeltas).
+_live_deltas = snapshots.LiveDeltas()
 
 
 def _broadcast_vehicles(rows: list[dict[str, Any]]) -> None:
-    broadcast(LIVE_GROUP, "vehicles.update", {"vehicles": rows})
+    """control's throttled live snapshot: what changed per vehicle, encoded once for all pages."""
+    broadcast_json(LIVE_GROUP, "vehicles.update", _live_deltas.payload(rows))
+
+
+def _stream_vehicle(pk: int, event: dict[str, Any]) -> None:
+    broadcast(vehicle_group(pk), "vehicle.messages", event)

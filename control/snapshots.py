@@ -7,6 +7,7 @@ import msgspec
 from control.execution import LayoutIndex
 from control.live import LiveVehicle
 from control.traffic_link import TrafficLink
+from control.traffic_support import vehicle_class
 
 
 def row(vehicle: LiveVehicle) -> dict[str, Any]:
@@ -78,7 +79,10 @@ def browser_row(
     vehicle: LiveVehicle, layouts: dict[str, LayoutIndex], traffic: TrafficLink | None = None
 ) -> dict[str, Any]:
     """What the live page draws and lists for one vehicle, including its remaining route and,
-    with traffic management, whom it waits for and the nodes it has reserved beyond its base."""
+    with traffic management, whom it waits for and the nodes it has reserved beyond its base.
+
+    Sent for up to every vehicle 5 times a second, so kept compact: positions in millimetres,
+    route points in centimetres."""
     state, position = vehicle.state, vehicle.visual_position
     base: list[list[float]] = []
     horizon: list[list[float]] = []
@@ -87,23 +91,26 @@ def browser_row(
         for node_state in state.node_states:
             place = nodes.get(node_state.node_id)
             if place is not None:
-                (base if node_state.released else horizon).append([place.x, place.y])
+                (base if node_state.released else horizon).append(_point(place.x, place.y))
     waiting_for: list[str] = []
     reserved: list[list[float]] = []
     if traffic is not None and position is not None and position.map_id in layouts:
         nodes = layouts[position.map_id].nodes
         waiting_for = traffic.waiting_for(vehicle)
-        reserved = [[nodes[n].x, nodes[n].y] for n in traffic.reserved(vehicle) if n in nodes]
+        reserved = [_point(nodes[n].x, nodes[n].y) for n in traffic.reserved(vehicle) if n in nodes]
+    footprint = vehicle_class(vehicle.factsheet)
     return {
         "id": vehicle.pk,
         "manufacturer": vehicle.manufacturer,
         "serial": vehicle.serial_number,
         "status": status_label(vehicle),
         "connection": vehicle.connection,
-        "x": position.x if position else None,
-        "y": position.y if position else None,
-        "theta": position.theta if position else None,
+        "x": round(position.x, 3) if position else None,
+        "y": round(position.y, 3) if position else None,
+        "theta": round(position.theta, 3) if position else None,
         "map": position.map_id if position else None,
+        # The footprint the map draws (metres): the factsheet's, or the planning default.
+        "size": [round(footprint.length, 2), round(footprint.width, 2)],
         "battery": round(state.battery_state.battery_charge, 1) if state else None,
         "mode": str(state.operating_mode) if state else None,
         "order": state.order_id if state else None,
@@ -121,3 +128,55 @@ def browser_row(
             for a in list(vehicle.instant_actions.values())[-5:]
         ],
     }
+
+
+def compact_row(row: dict[str, Any]) -> dict[str, Any]:
+    """A browser row for the live broadcast without its empty fields (None, "", []) and with
+    the clock skew in centiseconds: a third fewer bytes per vehicle, 5 times a second. The live
+    page reads a missing field as empty."""
+    compact = {key: value for key, value in row.items() if value or value == 0}
+    if "clock_skew" in compact:
+        compact["clock_skew"] = round(compact["clock_skew"], 2)
+    return compact
+
+
+class LiveDeltas:
+    """Turns control's broadcast rows into what the live page is sent: whole rows for vehicles
+    seen for the first time and, every `keyframe_every`-th broadcast, for all in it; otherwise
+    only the fields that changed since the vehicle's last broadcast, with None for a field that
+    became empty. A moving vehicle's change is its pose: about 50 bytes instead of 300.
+
+    The page replaces a vehicle with a whole row and merges a change into what it has; its
+    first picture comes from the database (and again after a reconnect), so a page that joined
+    late is complete with the next keyframe at the latest.
+    """
+
+    def __init__(self, keyframe_every: int = 10) -> None:
+        self.keyframe_every = keyframe_every
+        self.sent = 0
+        self.last: dict[tuple[Any, str, str], dict[str, Any]] = {}
+
+    def payload(self, rows: list[dict[str, Any]]) -> dict[str, list[dict[str, Any]]]:
+        """`{"vehicles": [whole rows], "changes": [changed fields with "id"]}` for `rows`."""
+        keyframe = self.sent % self.keyframe_every == 0
+        self.sent += 1
+        whole: list[dict[str, Any]] = []
+        changes: list[dict[str, Any]] = []
+        for row in rows:
+            compact = compact_row(row)
+            key = (row["id"], row["manufacturer"], row["serial"])
+            before = self.last.get(key)
+            self.last[key] = compact
+            if keyframe or before is None or row["id"] is None:
+                whole.append(compact)
+                continue
+            change = {k: v for k, v in compact.items() if before.get(k) != v}
+            change.update(dict.fromkeys(before.keys() - compact.keys()))
+            if change:
+                change["id"] = row["id"]
+                changes.append(change)
+        return {"vehicles": whole, "changes": changes}
+
+
+def _point(x: float, y: float) -> list[float]:
+    return [round(x, 2), round(y, 2)]

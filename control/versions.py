@@ -5,6 +5,7 @@ orders and instant actions on publish (REFERENCE §6, `vda5050.adapt`). The wire
 the topic's major level: a vehicle that changes firmware changes its topics too.
 """
 
+import functools
 from collections.abc import Callable, Collection
 from typing import Any
 
@@ -20,6 +21,7 @@ _INBOUND: dict[str, Callable[[Any], Any]] = {
 }
 
 
+@functools.lru_cache(maxsize=256)  # once per message: a handful of distinct pairs per fleet
 def wire_version(topic_major: str, known: str | None) -> str:
     """The version to decode with: the vehicle's, unless its topic says another major."""
     if known is not None and vda5050.major_version_of(known) == topic_major:

@@ -2,16 +2,18 @@
 
 from typing import Any
 
-from django.contrib.auth.decorators import login_required
+from django.contrib.auth.decorators import login_required, permission_required
 from django.http import HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import render
 
-from control import selectors
+from control import readiness, selectors
+from fleet import roles
 
 
 @login_required
+@permission_required(roles.VIEW_OPERATIONS, raise_exception=True)
 def live_page(request: HttpRequest) -> HttpResponse:
-    """The fleet live: the layout as SVG, vehicles moving on it, vehicle and order lists."""
+    """The fleet live: the layout on a canvas, vehicles moving on it, vehicle and order lists."""
     return render(
         request,
         "control/live.html",
@@ -24,11 +26,13 @@ def live_page(request: HttpRequest) -> HttpResponse:
 
 
 @login_required
+@permission_required(roles.VIEW_OPERATIONS, raise_exception=True)
 def vehicles_json(request: HttpRequest) -> JsonResponse:
     return JsonResponse({"vehicles": selectors.list_vehicle_rows()})
 
 
 @login_required
+@permission_required(roles.VIEW_OPERATIONS, raise_exception=True)
 def orders_json(request: HttpRequest) -> JsonResponse:
     return JsonResponse({"orders": selectors.list_order_rows()})
 
@@ -37,3 +41,9 @@ def health(request: HttpRequest) -> JsonResponse:
     """Liveness for load balancers and the demo smoke test (no login)."""
     payload: dict[str, Any] = {"status": "ok"}
     return JsonResponse(payload)
+
+
+def ready(request: HttpRequest) -> JsonResponse:
+    """Readiness (no login): database, Redis and a leading control process; 503 if not."""
+    payload = readiness.web_readiness()
+    return JsonResponse(payload, status=200 if payload["ready"] else 503)

@@ -3,7 +3,7 @@
 from typing import Any
 
 from django.apps import AppConfig
-from django.db.models.signals import post_save
+from django.db.models.signals import post_migrate, post_save
 
 
 class FleetConfig(AppConfig):
@@ -14,6 +14,20 @@ class FleetConfig(AppConfig):
         from django.contrib.admin.models import LogEntry
 
         post_save.connect(_audit_admin_change, sender=LogEntry, dispatch_uid="audit-admin-log")
+        post_migrate.connect(_sync_roles_after_migrate, dispatch_uid="fleet-sync-roles")
+
+
+def _sync_roles_after_migrate(sender: AppConfig, using: str = "default", **kwargs: Any) -> None:
+    """Keep the role groups in step after a migrate (and a test database flush). Runs once, for
+    the last app with models: by then every app's permissions exist."""
+    from django.apps import apps
+
+    with_models = [config for config in apps.get_app_configs() if config.models_module is not None]
+    if not with_models or sender is not with_models[-1]:
+        return
+    from fleet.roles import sync_roles
+
+    sync_roles(using=using)
 
 
 def _audit_admin_change(sender: Any, instance: Any, created: bool, **kwargs: Any) -> None:

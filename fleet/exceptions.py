@@ -1,10 +1,14 @@
 """Domain errors and their mapping to HTTP answers for the API."""
 
+import logging
 from typing import Any
 
+from django.db import InterfaceError, OperationalError
 from rest_framework import status
 from rest_framework.response import Response
 from rest_framework.views import exception_handler
+
+logger = logging.getLogger(__name__)
 
 
 class DomainError(Exception):
@@ -20,7 +24,17 @@ class InvalidRequestError(DomainError):
 
 
 def api_exception_handler(exc: Exception, context: dict[str, Any]) -> Response | None:
-    """DRF's handler plus DomainError → 409/422 with the reason, so views need no try blocks."""
+    """DRF's handler plus DomainError → 409/422 with the reason, so views need no try blocks,
+    and a database outage → 503 with Retry-After (the client retries; nothing was written)."""
     if isinstance(exc, DomainError):
         return Response({"detail": str(exc)}, status=exc.http_status)
+    if isinstance(exc, OperationalError | InterfaceError):
+        from fleet.middleware import RETRY_AFTER_SECONDS
+
+        logger.warning("database error in %s: %r", context.get("view"), exc)
+        return Response(
+            {"detail": "The database is unavailable; retry later."},
+            status=status.HTTP_503_SERVICE_UNAVAILABLE,
+            headers={"Retry-After": str(RETRY_AFTER_SECONDS)},
+        )
     return exception_handler(exc, context)

@@ -1,9 +1,12 @@
-"""The audit trail: every change and every command, who gave it, when and from where."""
+"""The audit trail (every change and every command, who gave it, when and from where) and the
+carrier of the fleet-wide permissions."""
 
 from typing import Any
 
 from django.conf import settings
 from django.db import models
+
+from fleet.roles import FLEET_CAPABILITIES
 
 
 class AuditEntry(models.Model):
@@ -40,3 +43,17 @@ class AuditEntry(models.Model):
 
     def delete(self, *args: Any, **kwargs: Any) -> tuple[int, dict[str, int]]:
         raise ValueError("audit entries are never deleted")
+
+
+class FleetPermission(models.Model):
+    """Carries the fleet-wide capabilities (`fleet.roles.FLEET_CAPABILITIES`) as Django
+    permissions (`fleet.view_operations`, ...). No table: only its content type and permissions
+    exist, so groups (the roles) and users can hold them like any model permission."""
+
+    class Meta:
+        managed = False
+        default_permissions = ()
+        permissions = FLEET_CAPABILITIES
+
+    def __str__(self) -> str:
+        return "fleet permission"

@@ -5,8 +5,10 @@ A role is a Django group of the same name, kept in step with `ROLE_PERMISSIONS` 
 and websockets check *permissions*, never role names, so a site can give a person a single extra
 permission without inventing a role.
 
-The fleet-wide capabilities are custom permissions on `fleet.FleetPermission`; per-model
-permissions (`orders.add_transportorder`, ...) are used where a page edits one model.
+The fleet-wide capabilities are custom permissions on `fleet.FleetPermission`; the pages check
+those. Per-model permissions (`ROLE_MODEL_PERMISSIONS`) decide what a role sees and changes in
+the admin. API scopes of integration clients (`API_SCOPES`) map onto the same permissions for
+signed-in users. docs/SECURITY.md has the tables.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ VIEW_AUDIT = "fleet.view_auditentry"  # the audit trail (model permission of Aud
 MANAGE_LAYOUTS = "fleet.manage_layouts"  # layouts, zones, stations, map releases
 ADMINISTER = "fleet.administer"  # vehicles registry, MQTT logins, users, clients, settings
 
-FLEET_CAPABILITIES: list[tuple[str, str]] = [
+FLEET_CAPABILITIES: tuple[tuple[str, str], ...] = (
     ("view_operations", "See live operations: map, vehicles, orders, alerts"),
     ("operate_orders", "Create, cancel, reprioritise and reassign transport orders"),
     ("command_vehicles", "Send instant actions to vehicles"),
@@ -35,7 +37,7 @@ FLEET_CAPABILITIES: list[tuple[str, str]] = [
     ("view_reports", "Read manager reports and export them"),
     ("manage_layouts", "Edit layouts, zones and stations; release maps"),
     ("administer", "Manage vehicles, MQTT logins, users, integration clients and settings"),
-]
+)
 
 OPERATOR = "operator"
 TECHNICIAN = "technician"
@@ -45,10 +47,22 @@ ROLES = (OPERATOR, TECHNICIAN, MANAGER, ADMINISTRATOR)
 
 ROLE_PERMISSIONS: dict[str, frozenset[str]] = {
     OPERATOR: frozenset(
-        {VIEW_OPERATIONS, OPERATE_ORDERS, COMMAND_VEHICLES, SEND_TO_CHARGE_OR_PARK, ACKNOWLEDGE_ALERTS}
+        {
+            VIEW_OPERATIONS,
+            OPERATE_ORDERS,
+            COMMAND_VEHICLES,
+            SEND_TO_CHARGE_OR_PARK,
+            ACKNOWLEDGE_ALERTS,
+        }
     ),
     TECHNICIAN: frozenset(
-        {VIEW_OPERATIONS, COMMAND_VEHICLES, SEND_TO_CHARGE_OR_PARK, ACKNOWLEDGE_ALERTS, MAINTAIN_VEHICLES}
+        {
+            VIEW_OPERATIONS,
+            COMMAND_VEHICLES,
+            SEND_TO_CHARGE_OR_PARK,
+            ACKNOWLEDGE_ALERTS,
+            MAINTAIN_VEHICLES,
+        }
     ),
     MANAGER: frozenset({VIEW_OPERATIONS, VIEW_REPORTS, VIEW_AUDIT}),
     # Administrators hold every permission of the project (sync_roles adds the model ones).
@@ -103,8 +117,9 @@ ADMIN_ENTRY_PERMISSIONS = (ADMINISTER, MAINTAIN_VEHICLES, VIEW_REPORTS)
 STAFF_ROLES = frozenset({TECHNICIAN, MANAGER, ADMINISTRATOR})
 
 # API scopes of integration clients: scope → (what it allows, the permission a signed-in user
-# needs for the same endpoints). fleet.api_access maps every API endpoint to a scope.
-API_SCOPES: dict[str, tuple[str, str]] = {
+# needs for the same endpoints; None: clients only). fleet.api_access maps every API endpoint
+# to a scope.
+API_SCOPES: dict[str, tuple[str, str | None]] = {
     "orders:read": ("Read transport orders", VIEW_OPERATIONS),
     "orders:write": ("Create, cancel and reprioritise transport orders", OPERATE_ORDERS),
     "vehicles:read": ("Read vehicles and their commands", VIEW_OPERATIONS),
@@ -115,7 +130,8 @@ API_SCOPES: dict[str, tuple[str, str]] = {
     "layouts:write": ("Import LIF, change zones, release and distribute maps", MANAGE_LAYOUTS),
     "maintenance:read": ("Read service plans, work orders, counters and errors", VIEW_OPERATIONS),
     "battery:read": ("Read batteries, chargers and charge sessions", VIEW_OPERATIONS),
-    "webhooks:manage": ("Manage the client's own webhook subscriptions", ADMINISTER),
+    # Subscriptions belong to a client: no signed-in user manages them through the API.
+    "webhooks:manage": ("Manage the client's own webhook subscriptions", None),
 }
 ALL_API_SCOPES: tuple[str, ...] = tuple(API_SCOPES)
 

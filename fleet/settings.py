@@ -44,7 +44,7 @@ DATA_UPLOAD_MAX_MEMORY_SIZE = env.int("MAX_REQUEST_BYTES", default=32 * 1024 * 1
 
 INSTALLED_APPS = [
     "daphne",
-    "django.contrib.admin",
+    "fleet.admin_site.FleetAdminConfig",  # django.contrib.admin, entered by role (fleet.roles)
     "django.contrib.auth",
     "django.contrib.contenttypes",
     "django.contrib.sessions",
@@ -70,6 +70,7 @@ INSTALLED_APPS = [
 
 MIDDLEWARE = [
     "django.middleware.security.SecurityMiddleware",
+    "fleet.middleware.DatabaseUnavailableMiddleware",  # database down: 503 + Retry-After
     "whitenoise.middleware.WhiteNoiseMiddleware",
     "django.contrib.sessions.middleware.SessionMiddleware",
     "django.middleware.common.CommonMiddleware",
@@ -147,6 +148,7 @@ CELERY_BEAT_SCHEDULE = {
     "service-plans": {"task": "maintenance.tasks.check_service_plans", "schedule": 60.0},
     "reports-roll-up": {"task": "reports.tasks.roll_up_orders", "schedule": 60.0},
     "reports-sample": {"task": "reports.tasks.sample_vehicles", "schedule": 15.0},
+    "reports-traffic-waits": {"task": "reports.tasks.roll_up_traffic_waits", "schedule": 60.0},
     "alerts-escalate": {"task": "alerts.escalate", "schedule": 60.0},
 }
 
@@ -184,6 +186,16 @@ FLEET_CONTROL = {
     # enough for a single-vehicle site.
     "TRAFFIC": env.bool("FLEET_TRAFFIC", default=True),
 }
+# Where control's flush hands finished traffic waits (vehicle held at its decision point): the
+# reports app records them. Wired here because control and reports are independent siblings.
+FLEET_TRAFFIC_WAIT_RECORDER = "reports.waits.record_traffic_waits"
+# control's /health and /ready (control/health.py; 0 = off). Two controls on one host (a
+# standby pair) need two ports.
+CONTROL_HEALTH_PORT = env.int("CONTROL_HEALTH_PORT", default=8081)
+# GET /metrics (Prometheus, control/prometheus.py): anonymous scrapes from these networks only,
+# others need `Authorization: Bearer <METRICS_TOKEN>` (unset: no token is accepted).
+METRICS_ALLOWED_CIDRS = env.list("METRICS_ALLOWED_CIDRS", default=["127.0.0.1/32"])
+METRICS_TOKEN = env.str("METRICS_TOKEN", default="")
 
 AUTH_PASSWORD_VALIDATORS = [
     {"NAME": "django.contrib.auth.password_validation.UserAttributeSimilarityValidator"},
@@ -216,7 +228,8 @@ REST_FRAMEWORK = {
         "rest_framework.authentication.SessionAuthentication",
         "rest_framework.authentication.BasicAuthentication",
     ],
-    "DEFAULT_PERMISSION_CLASSES": ["rest_framework.permissions.IsAuthenticated"],
+    # Tokens need the endpoint's scope, users their role's permission (fleet/api_access.py).
+    "DEFAULT_PERMISSION_CLASSES": ["fleet.api_access.ScopedAccess"],
     "EXCEPTION_HANDLER": "fleet.exceptions.api_exception_handler",
     "DEFAULT_PAGINATION_CLASS": "orders.api.pagination.BoundedLimitOffsetPagination",
     "PAGE_SIZE": 50,
@@ -270,11 +283,21 @@ STATICFILES_DIRS = [BASE_DIR / "static"]
 MEDIA_ROOT = env.path("MEDIA_ROOT", default=BASE_DIR / "media")
 MEDIA_URL = "/media/"
 
+# LOG_FORMAT=json: one JSON object per line for a log collector (fleet/logging.py); plain otherwise.
+LOG_FORMAT = env.str("LOG_FORMAT", default="plain")
 LOGGING = {
     "version": 1,
     "disable_existing_loggers": False,
-    "formatters": {"plain": {"format": "%(asctime)s %(levelname)s %(name)s: %(message)s"}},
-    "handlers": {"console": {"class": "logging.StreamHandler", "formatter": "plain"}},
+    "formatters": {
+        "plain": {"format": "%(asctime)s %(levelname)s %(name)s: %(message)s"},
+        "json": {"()": "fleet.logging.JsonFormatter"},
+    },
+    "handlers": {
+        "console": {
+            "class": "logging.StreamHandler",
+            "formatter": "json" if LOG_FORMAT == "json" else "plain",
+        }
+    },
     "root": {"handlers": ["console"], "level": env.str("LOG_LEVEL", default="INFO")},
     "loggers": {
         "django.channels.server": {"level": "WARNING"},

@@ -5,6 +5,8 @@ from django.urls import include, path
 
 from fleet import media, views
 
+handler500 = "fleet.middleware.server_error"  # database down: 503, not 500
+
 urlpatterns = [
     path("admin/", admin.site.urls),
     path("accounts/", include("django.contrib.auth.urls")),  # login for staff who are not admins
@@ -19,5 +21,6 @@ urlpatterns = [
     path("maintenance/", include("maintenance.urls")),
     path("alerts/", include("alerts.urls")),
     path("inventory/", include("inventory.urls")),
+    path("metrics", include("control.metrics_urls")),  # Prometheus scrape (no login)
     path("", include("control.urls")),
 ]

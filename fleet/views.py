@@ -5,13 +5,14 @@ import itertools
 from datetime import datetime, time, timedelta
 
 from django import forms
-from django.contrib.auth.decorators import permission_required
 from django.core.paginator import Paginator
 from django.db.models import Q, QuerySet
 from django.http import HttpRequest, HttpResponse, StreamingHttpResponse
 from django.shortcuts import render
 from django.utils import timezone
 
+from fleet import roles
+from fleet.access import require_permission
 from fleet.models import AuditEntry
 
 
@@ -47,7 +48,7 @@ class AuditSearchForm(forms.Form):
         return entries
 
 
-@permission_required("fleet.view_auditentry")
+@require_permission(roles.VIEW_AUDIT)
 def audit_page(request: HttpRequest) -> HttpResponse:
     form = AuditSearchForm(request.GET or {})
     if not form.is_valid():
@@ -65,7 +66,7 @@ class _Echo:
         return value
 
 
-@permission_required("fleet.view_auditentry")
+@require_permission(roles.VIEW_AUDIT)
 def audit_csv(request: HttpRequest) -> HttpResponse | StreamingHttpResponse:
     """Every matching entry as CSV, streamed (the trail can be long)."""
     form = AuditSearchForm(request.GET or {})

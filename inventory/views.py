@@ -1,12 +1,12 @@
 """Pages of the inventory: stock and occupancy, discrepancies, CSV export and import."""
 
 from django.contrib import messages
-from django.contrib.admin.views.decorators import staff_member_required
-from django.contrib.auth.decorators import login_required
 from django.http import Http404, HttpRequest, HttpResponse
 from django.shortcuts import redirect, render
 from django.views.decorators.http import require_POST
 
+from fleet import roles
+from fleet.access import require_permission
 from fleet.exceptions import DomainError
 from inventory import selectors, services
 from inventory.models import LoadCarrier, Movement
@@ -14,7 +14,7 @@ from inventory.models import LoadCarrier, Movement
 MAX_UPLOAD = 5 * 1024 * 1024  # bytes; a CSV of 100,000 loads is well below this
 
 
-@login_required
+@require_permission(roles.VIEW_OPERATIONS)
 def stock(request: HttpRequest) -> HttpResponse:
     return render(
         request,
@@ -30,7 +30,7 @@ def stock(request: HttpRequest) -> HttpResponse:
     )
 
 
-@login_required
+@require_permission(roles.VIEW_OPERATIONS)
 def export(request: HttpRequest, kind: str) -> HttpResponse:
     if kind not in ("locations", "stock"):
         raise Http404
@@ -39,8 +39,8 @@ def export(request: HttpRequest, kind: str) -> HttpResponse:
     return response
 
 
-@staff_member_required
 @require_POST
+@require_permission(roles.ADMINISTER)
 def import_(request: HttpRequest, kind: str) -> HttpResponse:
     upload = request.FILES.get("file")
     if upload is None or upload.size is None or upload.size > MAX_UPLOAD:

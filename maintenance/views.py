@@ -1,18 +1,14 @@
 """Staff pages of maintenance: due and open work, one vehicle (counters, service history,
 errors, out of service and back) and one work order (advance it, notes, parts, files).
-Reading needs a login; changing needs staff."""
-
-from collections.abc import Callable
-from functools import wraps
-from typing import Any
+Reading needs VIEW_OPERATIONS; changing needs MAINTAIN_VEHICLES (fleet.roles)."""
 
 from django.contrib import messages
-from django.contrib.auth.decorators import login_required
-from django.core.exceptions import PermissionDenied
 from django.http import HttpRequest, HttpResponse
 from django.shortcuts import get_object_or_404, redirect, render
 from django.views.decorators.http import require_POST
 
+from fleet import roles
+from fleet.access import require_permission
 from fleet.exceptions import DomainError
 from maintenance import selectors, services
 from maintenance.forms import AdvanceForm, NewWorkOrderForm, OutOfServiceForm
@@ -20,17 +16,7 @@ from maintenance.models import ErrorRecord, VehicleCounters, WorkOrder
 from robots.models import Vehicle
 
 
-def staff_only(view: Callable[..., HttpResponse]) -> Callable[..., HttpResponse]:
-    @wraps(view)
-    def wrapper(request: HttpRequest, *args: Any, **kwargs: Any) -> HttpResponse:
-        if not request.user.is_staff:
-            raise PermissionDenied
-        return view(request, *args, **kwargs)
-
-    return login_required(wrapper)
-
-
-@login_required
+@require_permission(roles.VIEW_OPERATIONS)
 def overview(request: HttpRequest) -> HttpResponse:
     counters = {c.vehicle_id: c for c in VehicleCounters.objects.all()}
     vehicles = list(Vehicle.objects.order_by("manufacturer", "serial_number"))
@@ -46,7 +32,7 @@ def overview(request: HttpRequest) -> HttpResponse:
     )
 
 
-@login_required
+@require_permission(roles.VIEW_OPERATIONS)
 def vehicle_detail(request: HttpRequest, pk: int) -> HttpResponse:
     vehicle = get_object_or_404(Vehicle, pk=pk)
     return render(
@@ -67,7 +53,7 @@ def vehicle_detail(request: HttpRequest, pk: int) -> HttpResponse:
 
 
 @require_POST
-@staff_only
+@require_permission(roles.MAINTAIN_VEHICLES)
 def vehicle_service(request: HttpRequest, pk: int) -> HttpResponse:
     """Take out of service (with a reason), return to service, or open a work order."""
     vehicle = get_object_or_404(Vehicle, pk=pk)
@@ -97,13 +83,11 @@ def vehicle_service(request: HttpRequest, pk: int) -> HttpResponse:
     return redirect("maintenance:vehicle", pk=pk)
 
 
-@login_required
+@require_permission(roles.VIEW_OPERATIONS, to_change=roles.MAINTAIN_VEHICLES)
 def work_order_detail(request: HttpRequest, pk: int) -> HttpResponse:
     work_order = get_object_or_404(WorkOrder.objects.select_related("vehicle", "plan"), pk=pk)
     form = AdvanceForm(initial={"status": work_order.status})
     if request.method == "POST":
-        if not request.user.is_staff:
-            raise PermissionDenied
         form = AdvanceForm(request.POST, request.FILES)
         if form.is_valid():
             try:

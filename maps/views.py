@@ -1,21 +1,21 @@
 """The layout pages: choose or create a map, and the layout editor with its JSON endpoints.
 
-Staff only. The editor posts the whole layout as JSON (CSRF token in the X-CSRFToken header):
+They need MANAGE_LAYOUTS (fleet.roles). The editor posts the whole layout as JSON (CSRF token
+in the X-CSRFToken header):
 `check/` answers with the problems or the validation findings it would have, `save/` writes it
 as a new version (422 with every problem, 409 when someone saved in between).
 """
 
 import json
 import mimetypes
-from collections.abc import Callable
-from functools import wraps
 from typing import Any
 
-from django.contrib.admin.views.decorators import staff_member_required
 from django.http import FileResponse, Http404, HttpRequest, HttpResponse, JsonResponse
 from django.shortcuts import get_object_or_404, redirect, render
 from django.views.decorators.http import require_GET, require_POST
 
+from fleet import roles
+from fleet.access import require_permission
 from maps.forms import NewMapForm
 from maps.models import Map
 from maps.selectors import editor_data, release_by_token, validate_layout
@@ -31,20 +31,7 @@ from maps.services import (
 MAX_PAYLOAD = 32 * 1024 * 1024  # bytes: a layout of about 200,000 nodes
 
 
-def staff_json(view: Callable[..., JsonResponse]) -> Callable[..., JsonResponse]:
-    """Staff only, answering 403 in JSON (the editor's requests are not page loads)."""
-
-    @wraps(view)
-    def wrapper(request: HttpRequest, *args: Any, **kwargs: Any) -> JsonResponse:
-        user = request.user
-        if not (user.is_authenticated and user.is_active and user.is_staff):
-            return JsonResponse({"detail": "staff only: sign in again"}, status=403)
-        return view(request, *args, **kwargs)
-
-    return wrapper
-
-
-@staff_member_required
+@require_permission(roles.MANAGE_LAYOUTS)
 def layout_list(request: HttpRequest) -> HttpResponse:
     """The maps to edit, and a form for a new empty one."""
     form = NewMapForm(request.POST or None)
@@ -62,7 +49,7 @@ def layout_list(request: HttpRequest) -> HttpResponse:
     return render(request, "maps/list.html", {"maps": list_editable_maps(), "form": form})
 
 
-@staff_member_required
+@require_permission(roles.MANAGE_LAYOUTS)
 def layout_editor(request: HttpRequest, pk: int) -> HttpResponse:
     """The layout editor of one map."""
     layout = get_object_or_404(Map.objects.select_related("site"), pk=pk)
@@ -70,7 +57,7 @@ def layout_editor(request: HttpRequest, pk: int) -> HttpResponse:
 
 
 @require_POST
-@staff_json
+@require_permission(roles.MANAGE_LAYOUTS, json=True)
 def layout_check(request: HttpRequest, pk: int) -> JsonResponse:
     """The problems of the posted layout, or the findings validation would report once saved."""
     layout = get_object_or_404(Map, pk=pk)
@@ -87,7 +74,7 @@ def layout_check(request: HttpRequest, pk: int) -> JsonResponse:
 
 
 @require_POST
-@staff_json
+@require_permission(roles.MANAGE_LAYOUTS, json=True)
 def layout_save(request: HttpRequest, pk: int) -> JsonResponse:
     """Save the posted layout as the map's next version."""
     layout = get_object_or_404(Map, pk=pk)
@@ -111,7 +98,7 @@ def layout_save(request: HttpRequest, pk: int) -> JsonResponse:
     )
 
 
-@staff_member_required
+@require_permission(roles.MANAGE_LAYOUTS)
 def floor_plan(request: HttpRequest, pk: int) -> FileResponse:
     """The map's floor plan image (served here, behind the login, in every mode)."""
     layout = get_object_or_404(Map, pk=pk)

@@ -2,11 +2,13 @@
 
 from typing import Any
 
+from django import forms
 from django.contrib import admin, messages
 from django.db import models
 from django.db.models import QuerySet
 from django.http import HttpRequest
 
+from fleet import roles
 from fleet.exceptions import DomainError
 from orders import services
 from orders.models import (
@@ -204,10 +206,29 @@ class ApiTokenInline(ReadOnlyInline):
     )
 
 
+class IntegrationClientForm(forms.ModelForm):  # type: ignore[type-arg]
+    """Scopes as one checkbox each (the model keeps them as a JSON list)."""
+
+    scopes = forms.MultipleChoiceField(
+        choices=[(name, f"{name}: {text}") for name, (text, _) in roles.API_SCOPES.items()],
+        widget=forms.CheckboxSelectMultiple,
+        required=False,
+        help_text="What the client's tokens may call; nothing else is allowed.",
+    )
+
+    class Meta:
+        model = IntegrationClient
+        fields = ["name", "description", "is_active", "scopes"]
+
+    def clean_scopes(self) -> list[str]:
+        return services.checked_scopes(self.cleaned_data["scopes"])
+
+
 @admin.register(IntegrationClient)
 class IntegrationClientAdmin(admin.ModelAdmin[IntegrationClient]):
-    list_display = ["name", "is_active", "created_at"]
-    fields = ["name", "description", "is_active", "user"]
+    form = IntegrationClientForm
+    list_display = ["name", "is_active", "scope_list", "created_at"]
+    fields = ["name", "description", "is_active", "scopes", "user"]
     readonly_fields = ["user"]
     inlines = [ApiTokenInline]
     actions = ["issue_token"]
@@ -219,8 +240,14 @@ class IntegrationClientAdmin(admin.ModelAdmin[IntegrationClient]):
         if change:
             super().save_model(request, obj, form, change)
             return
-        created = services.create_integration_client(name=obj.name, description=obj.description)
+        created = services.create_integration_client(
+            name=obj.name, description=obj.description, scopes=obj.scopes
+        )
         obj.pk, obj.user = created.pk, created.user
+
+    @admin.display(description="scopes")
+    def scope_list(self, obj: IntegrationClient) -> str:
+        return ", ".join(obj.scopes) or "none"
 
     @admin.action(description="Issue a new API token (shown once)")
     def issue_token(self, request: HttpRequest, queryset: QuerySet[IntegrationClient]) -> None:

@@ -2,11 +2,11 @@
 
 from django.urls import path
 
-from orders import views
+from orders import board, views
 
 app_name = "orders"
 urlpatterns = [
-    path("", views.order_list, name="list"),
+    path("", board.orders_page, name="list"),  # the board; the list with ?view=list
     path("new/", views.order_create, name="create"),
     path("<int:pk>/cancel/", views.order_cancel, name="cancel"),
     path("<int:pk>/priority/", views.order_priority, name="priority"),

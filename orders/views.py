@@ -5,7 +5,6 @@ service call; a refused change comes back as a message, never as a half-done wri
 from typing import Any
 
 from django.contrib import messages
-from django.contrib.auth.decorators import login_required, permission_required
 from django.contrib.auth.models import User
 from django.core.paginator import Paginator
 from django.db.models import Q, QuerySet
@@ -13,6 +12,8 @@ from django.http import HttpRequest, HttpResponse
 from django.shortcuts import get_object_or_404, redirect, render
 from django.views.decorators.http import require_POST
 
+from fleet import roles
+from fleet.access import require_permission
 from fleet.exceptions import DomainError
 from orders import services
 from orders.forms import (
@@ -30,7 +31,7 @@ from robots.models import Vehicle
 PAGE_SIZE = 50
 
 
-@login_required
+@require_permission(roles.VIEW_OPERATIONS)
 def order_list(request: HttpRequest) -> HttpResponse:
     """Orders newest first with status, vehicle, steps and why they wait or failed."""
     form = OrderFilterForm(request.GET or None)
@@ -72,8 +73,7 @@ def _query_without_page(request: HttpRequest) -> str:
     return query.urlencode()
 
 
-@login_required
-@permission_required("orders.add_transportorder", raise_exception=True)
+@require_permission(roles.OPERATE_ORDERS)
 def order_create(request: HttpRequest) -> HttpResponse:
     """A multi-stop order: up to six steps, blank rows ignored."""
     form = OrderCreateForm(request.POST or None)
@@ -112,8 +112,7 @@ def _change(request: HttpRequest, pk: int, act: Any) -> HttpResponse:
 
 
 @require_POST
-@login_required
-@permission_required("orders.change_transportorder", raise_exception=True)
+@require_permission(roles.OPERATE_ORDERS)
 def order_cancel(request: HttpRequest, pk: int) -> HttpResponse:
     def act(order: TransportOrder) -> str:
         order = services.cancel_transport_order(order=order, reason="staff", by=request.user)
@@ -123,8 +122,7 @@ def order_cancel(request: HttpRequest, pk: int) -> HttpResponse:
 
 
 @require_POST
-@login_required
-@permission_required("orders.change_transportorder", raise_exception=True)
+@require_permission(roles.OPERATE_ORDERS)
 def order_priority(request: HttpRequest, pk: int) -> HttpResponse:
     form = PriorityForm(request.POST)
 
@@ -139,8 +137,7 @@ def order_priority(request: HttpRequest, pk: int) -> HttpResponse:
 
 
 @require_POST
-@login_required
-@permission_required("orders.change_transportorder", raise_exception=True)
+@require_permission(roles.OPERATE_ORDERS)
 def order_reassign(request: HttpRequest, pk: int) -> HttpResponse:
     form = ReassignForm(request.POST)
 
@@ -154,35 +151,32 @@ def order_reassign(request: HttpRequest, pk: int) -> HttpResponse:
     return _change(request, pk, act)
 
 
-@login_required
+@require_permission(roles.VIEW_OPERATIONS, to_change=roles.OPERATE_ORDERS)
 def recurring_list(request: HttpRequest) -> HttpResponse:
     """Recurring orders and a form for a new A → B one."""
     form = RecurringOrderForm(request.POST or None)
-    if request.method == "POST":
-        if not request.user.has_perm("orders.add_recurringorder"):
-            messages.error(request, "You may not set up recurring orders.")
-        elif form.is_valid():
-            data = form.cleaned_data
-            schedule = RecurringOrder(
-                name=data["name"],
-                map=data["source"].map,
-                steps=[
-                    {"station": data["source"].station_id, "operation": "PICK"},
-                    {"station": data["destination"].station_id, "operation": "DROP"},
-                ],
-                interval_minutes=data["interval_minutes"],
-                weekdays=sorted(int(d) for d in data["weekdays"]),
-                window_start=data["window_start"],
-                window_end=data["window_end"],
-                priority=data["priority"],
-                created_by=request.user if isinstance(request.user, User) else None,
-            )
-            try:
-                services.save_recurring_order(schedule=schedule)
-            except DomainError as exc:
-                form.add_error(None, str(exc))
-            else:
-                messages.success(request, f"Recurring order {schedule.name!r} saved.")
-                return redirect("orders:recurring")
+    if request.method == "POST" and form.is_valid():
+        data = form.cleaned_data
+        schedule = RecurringOrder(
+            name=data["name"],
+            map=data["source"].map,
+            steps=[
+                {"station": data["source"].station_id, "operation": "PICK"},
+                {"station": data["destination"].station_id, "operation": "DROP"},
+            ],
+            interval_minutes=data["interval_minutes"],
+            weekdays=sorted(int(d) for d in data["weekdays"]),
+            window_start=data["window_start"],
+            window_end=data["window_end"],
+            priority=data["priority"],
+            created_by=request.user if isinstance(request.user, User) else None,
+        )
+        try:
+            services.save_recurring_order(schedule=schedule)
+        except DomainError as exc:
+            form.add_error(None, str(exc))
+        else:
+            messages.success(request, f"Recurring order {schedule.name!r} saved.")
+            return redirect("orders:recurring")
     schedules = RecurringOrder.objects.select_related("map").order_by("name")
     return render(request, "orders/recurring.html", {"form": form, "schedules": schedules})

@@ -121,3 +121,105 @@ class RollupMark(models.Model):
 
     def __str__(self) -> str:
         return f"rolled up to {self.at}"
+
+
+# Upper bounds (seconds) of the traffic-wait histogram buckets; the last bucket is open-ended.
+WAIT_BUCKETS = (2, 5, 10, 20, 30, 60, 120, 300, 600)
+
+
+class TrafficWait(models.Model):
+    """One wait of a vehicle held by traffic management at its decision point: where, from when,
+    how long and for whom. Written by `control`'s flush when the wait ends (reports.waits);
+    the Celery roll-up adds it to the wait tables below, which the report page reads."""
+
+    vehicle = models.ForeignKey("robots.Vehicle", on_delete=models.CASCADE, related_name="+")
+    map_id = models.CharField(max_length=100, blank=True)
+    node_id = models.CharField(max_length=100, blank=True, help_text="the node it waited at")
+    x = models.FloatField(null=True, blank=True)
+    y = models.FloatField(null=True, blank=True)
+    started_at = models.DateTimeField()
+    seconds = models.FloatField()
+    waited_for = models.JSONField(default=list, help_text="serial numbers of the vehicles")
+
+    class Meta:
+        ordering = ["started_at"]
+        indexes = [models.Index(fields=["vehicle", "started_at"])]
+
+    def __str__(self) -> str:
+        return f"vehicle {self.vehicle_id} waited {self.seconds:.0f} s at {self.node_id}"
+
+
+class WaitHourCount(models.Model):
+    """Traffic waits of the whole fleet that began in one hour, per histogram bucket."""
+
+    hour = models.DateTimeField(help_text="start of the hour (UTC)")
+    bucket = models.PositiveSmallIntegerField(help_text="index into WAIT_BUCKETS")
+    count = models.PositiveIntegerField(default=0)
+    seconds = models.FloatField(default=0)
+
+    class Meta:
+        ordering = ["hour", "bucket"]
+        constraints = [
+            models.UniqueConstraint(fields=["hour", "bucket"], name="wait_hour_count_unique")
+        ]
+
+    def __str__(self) -> str:
+        return f"{self.hour:%Y-%m-%d %H}:00 waits[{self.bucket}] = {self.count}"
+
+
+class WaitDayCount(models.Model):
+    """Traffic waits of one vehicle that began on a day, per histogram bucket."""
+
+    day = models.DateField(help_text="local date (TIME_ZONE)")
+    vehicle = models.ForeignKey("robots.Vehicle", on_delete=models.CASCADE, related_name="+")
+    bucket = models.PositiveSmallIntegerField(help_text="index into WAIT_BUCKETS")
+    count = models.PositiveIntegerField(default=0)
+    seconds = models.FloatField(default=0)
+
+    class Meta:
+        ordering = ["day", "vehicle", "bucket"]
+        constraints = [
+            models.UniqueConstraint(
+                fields=["day", "vehicle", "bucket"], name="wait_day_count_unique"
+            )
+        ]
+
+    def __str__(self) -> str:
+        return f"{self.day} vehicle {self.vehicle_id} waits[{self.bucket}] = {self.count}"
+
+
+class WaitNodeDay(models.Model):
+    """Traffic waits at one node on a day: the heatmap's figures. One row per vehicle, plus one
+    with `vehicle` None for the whole fleet, which the unfiltered heatmap reads (a few rows a
+    day per node instead of one per vehicle)."""
+
+    day = models.DateField(help_text="local date (TIME_ZONE)")
+    vehicle = models.ForeignKey(
+        "robots.Vehicle", null=True, blank=True, on_delete=models.CASCADE, related_name="+"
+    )
+    map_id = models.CharField(max_length=100)
+    node_id = models.CharField(max_length=100)
+    count = models.PositiveIntegerField(default=0)
+    seconds = models.FloatField(default=0)
+
+    class Meta:
+        ordering = ["day", "vehicle", "map_id", "node_id"]
+        constraints = [
+            models.UniqueConstraint(
+                fields=["day", "vehicle", "map_id", "node_id"], name="wait_node_day_unique"
+            )
+        ]
+
+    def __str__(self) -> str:
+        return (
+            f"{self.day} vehicle {self.vehicle_id} {self.map_id}/{self.node_id}: {self.seconds} s"
+        )
+
+
+class WaitMark(models.Model):
+    """How far the traffic-wait roll-up has read (TrafficWait ids up to `last_id`); one row."""
+
+    last_id = models.BigIntegerField(default=0)
+
+    def __str__(self) -> str:
+        return f"waits rolled up to id {self.last_id}"

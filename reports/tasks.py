@@ -13,3 +13,10 @@ def roll_up_orders_task() -> int:
 @shared_task(name="reports.tasks.sample_vehicles", ignore_result=True)
 def sample_vehicles_task() -> int:
     return services.sample_vehicles()
+
+
+@shared_task(name="reports.tasks.roll_up_traffic_waits", ignore_result=True)
+def roll_up_traffic_waits_task() -> int:
+    from reports import waits
+
+    return waits.roll_up_traffic_waits()

@@ -5,13 +5,14 @@ from datetime import timedelta
 from typing import Any
 
 from django import forms
-from django.contrib.auth.decorators import login_required
 from django.http import Http404, HttpRequest, HttpResponse
 from django.shortcuts import render
 from django.utils import timezone
 from django.utils.safestring import SafeString, mark_safe
 
-from reports import charts, selectors
+from fleet import roles
+from fleet.access import require_permission
+from reports import charts, selectors, wait_views
 from reports.models import LEAD_TIME_BUCKETS
 from reports.selectors import ReportFilter
 from reports.services import TIME_COLUMNS
@@ -51,7 +52,7 @@ def _read_filter(request: HttpRequest) -> tuple[ReportFilterForm, ReportFilter |
     return form, form.report() if form.is_valid() else None
 
 
-@login_required
+@require_permission(roles.VIEW_REPORTS)
 def report_page(request: HttpRequest) -> HttpResponse:
     """Throughput, lead times, punctuality, utilisation and errors over a date range."""
     form, report = _read_filter(request)
@@ -86,7 +87,7 @@ def report_page(request: HttpRequest) -> HttpResponse:
         "uses": uses,
         "utilisation_svg": _svg(states, "Share of time per state and vehicle"),
         "errors": selectors.errors(report)[:50],
-    }
+    } | wait_views.wait_context(request, report)
     return render(request, "reports/report.html", context)
 
 
@@ -111,10 +112,10 @@ def _throughput_chart(hours: list[selectors.HourPoint]) -> charts.Chart:
     )
 
 
-EXPORTS = {"throughput", "shifts", "lead_times", "utilisation", "errors"}
+EXPORTS = {"throughput", "shifts", "lead_times", "utilisation", "errors"} | wait_views.WAIT_EXPORTS
 
 
-@login_required
+@require_permission(roles.VIEW_REPORTS)
 def export_csv(request: HttpRequest, name: str) -> HttpResponse:
     """One report table as CSV, for the same filter as the page."""
     if name not in EXPORTS:
@@ -132,6 +133,8 @@ def export_csv(request: HttpRequest, name: str) -> HttpResponse:
 
 
 def _rows(name: str, report: ReportFilter) -> list[list[Any]]:
+    if name in wait_views.WAIT_EXPORTS:
+        return wait_views.wait_rows(name, report)
     if name == "throughput":
         points = selectors.throughput_by_hour(report)
         return [["hour", "finished", "failed", "cancelled"]] + [

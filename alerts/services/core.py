@@ -167,20 +167,76 @@ def sync_causes(
         .filter(_starts_with_any(prefixes))
         .values_list("cause", "severity")
     )
-    raised = resolved = 0
+    # New causes in one INSERT and cleared ones in one UPDATE: after a broker restart every
+    # vehicle raises (or clears) at once, and one savepoint + select + insert per alert took
+    # seconds (issue 11, docs/LOAD.md).
+    raised = _open_many({c: kw for c, kw in active.items() if c not in open_causes})
     for cause, kwargs in active.items():
         severity = open_causes.get(cause)
-        if severity is None:
-            raise_alert(cause=cause, **kwargs)
-            raised += 1
-        elif SEVERITY_RANK[kwargs.get("severity", Severity.WARNING)] > SEVERITY_RANK[severity]:
+        if (
+            severity is not None
+            and SEVERITY_RANK[kwargs.get("severity", Severity.WARNING)] > SEVERITY_RANK[severity]
+        ):
             raise_alert(cause=cause, **kwargs)  # worse now: the open alert takes the severity
-    for cause in set(open_causes) - set(active):
-        if scope is not None and not _in_scope(cause, scope):
-            continue
-        if resolve_alert(cause) is not None:
-            resolved += 1
-    return raised, resolved
+    cleared = [
+        cause
+        for cause in set(open_causes) - set(active)
+        if scope is None or _in_scope(cause, scope)
+    ]
+    return raised, _auto_resolve_many(cleared)
+
+
+BULK_ROWS = 500  # rows per INSERT / causes per UPDATE
+
+
+def _open_many(causes: Mapping[str, Mapping[str, Any]]) -> int:
+    """Open an alert for each cause (none is open yet, as the caller just read): one INSERT
+    per BULK_ROWS. A cause another process opened meanwhile is skipped by the partial unique
+    index (ON CONFLICT DO NOTHING): its alert is open, which is what was asked."""
+    rows = []
+    for cause, kwargs in causes.items():
+        severity = kwargs.get("severity", Severity.WARNING)
+        source = kwargs.get("source", Source.OTHER)
+        if severity not in SEVERITY_RANK:
+            raise InvalidRequestError(f"unknown severity {severity!r}")
+        if source not in Source.values:
+            raise InvalidRequestError(f"unknown alert source {source!r}")
+        if not cause:
+            raise InvalidRequestError("an alert needs a cause key")
+        rows.append(
+            Alert(
+                cause=cause[:200],
+                source=source,
+                severity=severity,
+                vehicle_id=_vehicle_id(kwargs.get("vehicle")),
+                order_ref=str(kwargs.get("order_ref") or "")[:100],
+                message=kwargs["message"],
+                details=dict(kwargs.get("details") or {}),
+            )
+        )
+    if rows:
+        with transaction.atomic():
+            Alert.objects.bulk_create(rows, batch_size=BULK_ROWS, ignore_conflicts=True)
+    return len(rows)
+
+
+def _auto_resolve_many(causes: list[str]) -> int:
+    """Auto-resolve the open alerts of `causes` (their cause cleared by itself)."""
+    resolved = 0
+    now = timezone.now()
+    for start in range(0, len(causes), BULK_ROWS):
+        resolved += (
+            Alert.objects.filter(cause__in=causes[start : start + BULK_ROWS])
+            .exclude(status=Alert.Status.RESOLVED)
+            .update(
+                status=Alert.Status.RESOLVED,
+                resolved_at=now,
+                resolved_by=None,
+                resolve_comment="",
+                auto_resolved=True,
+            )
+        )
+    return resolved
 
 
 def _in_scope(cause: str, scope: Collection[str]) -> bool:

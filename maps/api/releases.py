@@ -1,7 +1,8 @@
 """API of released map files: list, release a map (optionally distributing it), distribute.
 
-Reading is for everyone signed in; releasing and distributing are staff writes. The file itself
-is served by `maps.views.release_file` at the release's download link (no login: vehicles).
+Reading needs layouts:read, releasing and distributing layouts:write (see fleet.api_access).
+The file itself is served by `maps.views.release_file` at the release's download link (no
+login: vehicles).
 """
 
 from typing import Any
@@ -14,7 +15,6 @@ from rest_framework.decorators import action
 from rest_framework.request import Request
 from rest_framework.response import Response
 
-from maps.api.views import StaffWrites
 from maps.models import Map, MapRelease
 from maps.selectors import list_releases
 from maps.services import distribute_release, release_map
@@ -62,7 +62,6 @@ class MapReleaseViewSet(
 
     queryset = list_releases()
     serializer_class = MapReleaseSerializer
-    permission_classes = [StaffWrites]
 
     def get_queryset(self) -> Any:
         releases = list_releases()

@@ -1,4 +1,4 @@
-"""API of maps, sites, stations and zones: read-only layout data, zones read and write (staff),
+"""API of maps, sites, stations and zones: read-only layout data, zones read and write,
 LIF import and export, validation, edge speed limits after zones."""
 
 from typing import Any
@@ -8,7 +8,6 @@ from drf_spectacular.utils import OpenApiParameter, extend_schema
 from rest_framework import status, viewsets
 from rest_framework.decorators import action
 from rest_framework.parsers import JSONParser, MultiPartParser
-from rest_framework.permissions import SAFE_METHODS, BasePermission, IsAdminUser
 from rest_framework.request import Request
 from rest_framework.response import Response
 from rest_framework.views import APIView
@@ -30,16 +29,6 @@ from maps.selectors import (
     validate_layout,
 )
 from maps.services import create_zone, delete_zone, import_lif, update_zone
-
-
-class StaffWrites(BasePermission):
-    """Everyone signed in reads; only staff change."""
-
-    def has_permission(self, request: Request, view: Any) -> bool:
-        user = request.user
-        if not user or not user.is_authenticated:
-            return False
-        return request.method in SAFE_METHODS or bool(user.is_staff)
 
 
 class MapViewSet(viewsets.ReadOnlyModelViewSet[Map]):
@@ -79,12 +68,12 @@ class MapViewSet(viewsets.ReadOnlyModelViewSet[Map]):
 
 
 class ZoneViewSet(viewsets.ModelViewSet[Zone]):
-    """Zones of the maps: list (filter by ?map=, ?zone_type=, ?enabled=), read; staff create,
-    change and delete. Every change takes effect in routing at once (the map's revision bumps)."""
+    """Zones of the maps: list (filter by ?map=, ?zone_type=, ?enabled=), read; create, change
+    and delete with layouts:write (fleet.api_access). Every change takes effect in routing at
+    once (the map's revision bumps)."""
 
     queryset = Zone.objects.select_related("map").prefetch_related("vehicle_types")
     serializer_class = ZoneSerializer
-    permission_classes = [StaffWrites]
 
     def get_queryset(self) -> Any:
         zones = super().get_queryset().order_by("map__map_id", "zone_id")
@@ -143,13 +132,12 @@ class StationViewSet(viewsets.ReadOnlyModelViewSet[Station]):
 
 
 class LifImportApi(APIView):
-    """POST a LIF file (multipart field `file`, or the JSON itself as the body); staff only.
+    """POST a LIF file (multipart field `file`, or the JSON itself as the body); layouts:write.
 
     `site` and `replace` come from the query string or form fields. 201 with the import report,
     or 422 with the report of every problem (nothing written).
     """
 
-    permission_classes = [IsAdminUser]
     parser_classes = [MultiPartParser, JSONParser]
 
     @extend_schema(

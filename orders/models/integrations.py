@@ -10,7 +10,8 @@ class IntegrationClient(models.Model):
 
     Each client acts as its own Django user (`user`, created with the client and without a
     password), so orders record who created them and idempotency keys are scoped per client.
-    It authenticates with one of its `tokens` and owns its webhook subscriptions.
+    It authenticates with one of its `tokens` and owns its webhook subscriptions; `scopes` say
+    which endpoints its tokens may call.
     """
 
     name = models.CharField(max_length=100, unique=True)
@@ -19,6 +20,11 @@ class IntegrationClient(models.Model):
     )
     description = models.TextField(blank=True)
     is_active = models.BooleanField(default=True)
+    scopes = models.JSONField(
+        default=list,
+        blank=True,
+        help_text="API scopes its tokens carry (fleet.roles.API_SCOPES), e.g. orders:write",
+    )
     created_at = models.DateTimeField(auto_now_add=True)
 
     class Meta:
@@ -46,6 +52,11 @@ class ApiToken(models.Model):
 
     def __str__(self) -> str:
         return f"{self.client} {self.prefix}…"
+
+    @property
+    def scopes(self) -> list[str]:
+        """What the token may do: its client's scopes (fleet.api_access checks them)."""
+        return list(self.client.scopes)
 
 
 class IdempotencyKey(models.Model):

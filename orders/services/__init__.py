@@ -11,6 +11,7 @@
 
 from orders.services.clients import (
     authenticate_api_token,
+    checked_scopes,
     create_integration_client,
     issue_api_token,
     revoke_api_token,
@@ -76,6 +77,7 @@ __all__ = [
     "check_recurring_order",
     "claim_idempotency_key",
     "complete_idempotency_key",
+    "checked_scopes",
     "create_integration_client",
     "create_due_recurring_orders",
     "create_transport_order",

@@ -2,12 +2,14 @@
 
 import hashlib
 import secrets
+from collections.abc import Collection
 from datetime import datetime, timedelta
 
 from django.contrib.auth import get_user_model
 from django.db import transaction
 from django.utils import timezone
 
+from fleet import roles
 from fleet.exceptions import InvalidRequestError
 from orders.models import ApiToken, IntegrationClient
 
@@ -16,14 +18,27 @@ _TOUCH_EVERY = timedelta(minutes=1)  # last_used_at is written at most this ofte
 
 
 @transaction.atomic
-def create_integration_client(*, name: str, description: str = "") -> IntegrationClient:
-    """Register a client with its own (password-less) user, under which its requests run."""
+def create_integration_client(
+    *, name: str, description: str = "", scopes: Collection[str] = ()
+) -> IntegrationClient:
+    """Register a client with its own (password-less) user, under which its requests run. Its
+    tokens may call the endpoints of `scopes` only (none by default: grant what it needs)."""
     if IntegrationClient.objects.filter(name=name).exists():
         raise InvalidRequestError(f"a client named {name!r} exists")
     user = get_user_model().objects.create_user(username=f"client:{name}"[:150])
     user.set_unusable_password()
     user.save(update_fields=["password"])
-    return IntegrationClient.objects.create(name=name, user=user, description=description)
+    return IntegrationClient.objects.create(
+        name=name, user=user, description=description, scopes=checked_scopes(scopes)
+    )
+
+
+def checked_scopes(scopes: Collection[str]) -> list[str]:
+    """`scopes` in the order of `fleet.roles.API_SCOPES`; an unknown one is refused."""
+    unknown = sorted(set(scopes) - set(roles.ALL_API_SCOPES))
+    if unknown:
+        raise InvalidRequestError(f"unknown scopes: {', '.join(unknown)}")
+    return [scope for scope in roles.ALL_API_SCOPES if scope in scopes]
 
 
 def issue_api_token(

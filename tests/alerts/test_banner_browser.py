@@ -5,12 +5,12 @@ acknowledges and resolves it with a comment."""
 from typing import Any
 
 import pytest
-from django.contrib.auth import get_user_model
 from django.test import Client
 
 from alerts.models import Alert, Severity, Source
 from alerts.services import raise_alert
 from tests.browser import CHROMIUM_ARGS, in_thread
+from tests.factories import user_with_role
 from tests.orders.test_orders_page_browser import chromium  # noqa: F401 (fixture)
 
 USERNAME, PASSWORD = "shiftlead", "alerts-page-password"
@@ -23,7 +23,7 @@ def test_the_banner_shows_a_new_alert_and_the_list_closes_it(
 ) -> None:
     from playwright.sync_api import sync_playwright
 
-    user = get_user_model().objects.create_user(USERNAME, password=PASSWORD)
+    user = user_with_role("operator", USERNAME, password=PASSWORD)
     client = Client()
     client.force_login(user)
     session = client.cookies["sessionid"].value

@@ -12,6 +12,7 @@ from alerts.services import raise_alert, resolve_alert
 from alerts.services.observe import SnapshotObserver
 from fleet.exceptions import InvalidRequestError
 from robots.models import Vehicle
+from tests.factories import user_with_role
 
 pytestmark = pytest.mark.django_db
 
@@ -60,7 +61,7 @@ def test_the_list_needs_a_login_and_a_resolve_needs_a_comment(client, django_use
     alert = raise_alert(cause="battery:1", source=Source.BATTERY, message="battery at 12 %")
     assert client.get("/alerts/").status_code == 302
     assert client.get("/alerts/banner.json").status_code == 302
-    user = django_user_model.objects.create_user("ops", password="pw")
+    user = user_with_role("operator", "ops", password="pw")
     client.force_login(user)
 
     page = client.get("/alerts/")

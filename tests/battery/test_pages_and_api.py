@@ -8,12 +8,12 @@ from rest_framework.test import APIClient
 
 from battery.models import Charger, ChargeSession
 from battery.services.observe import EnergyObserver
-from tests.factories import VehicleFactory
+from tests.factories import VehicleFactory, user_with_role
 
 
 @pytest.fixture
 def staff(django_user_model: Any) -> Any:
-    return django_user_model.objects.create_user("tech", password="x", is_staff=True)
+    return user_with_role("technician", "tech", password="x")
 
 
 def test_pages_need_a_login(client: Client, db: None) -> None:

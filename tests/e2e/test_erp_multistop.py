@@ -64,7 +64,7 @@ def test_erp_multi_stop_orders_finish_with_signed_callbacks_for_every_change(
     fleet_env: dict[str, str], tmp_path: Path, live_server: Any
 ) -> None:
     layout = create_layout(spec=warehouse_layout(columns=8, rows=4))  # PICK-1..6, DROP-1..6
-    erp = services.create_integration_client(name="erp")
+    erp = services.create_integration_client(name="erp", scopes=["orders:read", "orders:write"])
     token = services.issue_api_token(client=erp)[1]
     with webhook_endpoint() as endpoint:
         subscription = services.create_webhook_subscription(

@@ -77,7 +77,7 @@ def test_the_page_searches_and_the_csv_exports_for_those_allowed() -> None:
     auditor = get_user_model().objects.create_user("auditor")
     client = Client()
     client.force_login(auditor)
-    assert client.get("/audit/").status_code == 302  # no permission: to the login page
+    assert client.get("/audit/").status_code == 403  # signed in, without the permission
     auditor.user_permissions.add(Permission.objects.get(codename="view_auditentry"))
     page = client.get("/audit/?q=AGV-1")
     assert page.status_code == 200
@@ -107,7 +107,8 @@ def test_order_changes_and_vehicle_commands_are_audited_with_the_api_client(demo
     from orders.services import create_integration_client, issue_api_token
     from robots.models import Vehicle
 
-    _, key = issue_api_token(client=create_integration_client(name="erp"))
+    scopes = ["orders:write", "vehicles:command"]
+    _, key = issue_api_token(client=create_integration_client(name="erp", scopes=scopes))
     api = APIClient()
     api.credentials(HTTP_AUTHORIZATION=f"Bearer {key}")
     created = api.post(

@@ -51,7 +51,9 @@ def test_integration_clients_are_throttled_each_on_their_own(monkeypatch) -> Non
     cache.clear()
     clients = []
     for name in ("erp", "wms"):
-        _, key = issue_api_token(client=create_integration_client(name=name))
+        _, key = issue_api_token(
+            client=create_integration_client(name=name, scopes=["orders:read"])
+        )
         api = APIClient()
         api.credentials(HTTP_AUTHORIZATION=f"Bearer {key}")
         clients.append(api)
@@ -66,7 +68,7 @@ def test_integration_clients_are_throttled_each_on_their_own(monkeypatch) -> Non
 
 def test_an_oversized_request_body_is_refused_before_it_is_parsed(settings) -> None:
     settings.DATA_UPLOAD_MAX_MEMORY_SIZE = 10_000
-    _, key = issue_api_token(client=create_integration_client(name="erp"))
+    _, key = issue_api_token(client=create_integration_client(name="erp", scopes=["orders:write"]))
     api = APIClient()
     api.credentials(HTTP_AUTHORIZATION=f"Bearer {key}")
     body = json.dumps({"source": "PICK-1", "destination": "DROP-1", "note": "x" * 20_000})

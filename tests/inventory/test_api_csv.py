@@ -3,11 +3,13 @@
 import pytest
 from rest_framework.test import APIClient
 
+from fleet.roles import assign_role
 from inventory import services
 from inventory.models import LoadCarrier, Movement, StorageLocation
 from maps.models import Map, Station
 from orders import services as order_services
 from orders.models import TransportOrder
+from tests.factories import user_with_role
 
 pytestmark = pytest.mark.django_db
 
@@ -15,7 +17,9 @@ pytestmark = pytest.mark.django_db
 @pytest.fixture
 def api(db: None) -> APIClient:
     client = APIClient()
-    erp = order_services.create_integration_client(name="erp")
+    erp = order_services.create_integration_client(
+        name="erp", scopes=["loads:read", "loads:write", "orders:read"]
+    )
     client.credentials(HTTP_AUTHORIZATION=f"Bearer {order_services.issue_api_token(client=erp)[1]}")
     return client
 
@@ -106,7 +110,7 @@ def test_staff_import_stock_on_the_page_and_others_cannot(
     client, stocked, django_user_model
 ) -> None:
     csv = b"load_id,load_type,map_id,station_id,slot\nL7,EPAL,demo,DROP-1,\n"
-    user = django_user_model.objects.create_user("clerk", password="pw")
+    user = user_with_role("operator", "clerk", password="pw")  # sees stock, imports nothing
     client.force_login(user)
     assert client.get("/inventory/").status_code == 200
     from django.core.files.uploadedfile import SimpleUploadedFile
@@ -114,8 +118,7 @@ def test_staff_import_stock_on_the_page_and_others_cannot(
     client.post("/inventory/stock/import/", {"file": SimpleUploadedFile("s.csv", csv)})
     assert not LoadCarrier.objects.filter(load_id="L7").exists()
 
-    user.is_staff = True
-    user.save()
+    assign_role(user=user, role="administrator")
     client.post("/inventory/stock/import/", {"file": SimpleUploadedFile("s.csv", csv)})
     assert LoadCarrier.objects.get(load_id="L7").location.station.station_id == "DROP-1"
     assert client.get("/inventory/stock.csv").content.decode().count("\n") == 4

@@ -9,19 +9,19 @@ from rest_framework.test import APIClient
 
 from maintenance import services
 from maintenance.models import ErrorRecord, ServiceEvent, ServiceMove, WorkOrder
-from tests.factories import VehicleFactory
+from tests.factories import VehicleFactory, user_with_role
 
 pytestmark = pytest.mark.django_db
 
 
 @pytest.fixture
 def staff(django_user_model: Any) -> Any:
-    return django_user_model.objects.create_user("tech", password="x", is_staff=True)
+    return user_with_role("technician", "tech", password="x")
 
 
 @pytest.fixture
 def viewer(django_user_model: Any) -> Any:
-    return django_user_model.objects.create_user("viewer", password="x")
+    return user_with_role("manager", "viewer", password="x")  # reads, changes nothing
 
 
 def test_staff_take_a_vehicle_out_of_service_and_back_from_its_page(

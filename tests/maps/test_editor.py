@@ -5,7 +5,6 @@ import time
 from typing import Any
 
 import pytest
-from django.contrib.auth import get_user_model
 from django.core.files.base import ContentFile
 from django.test import Client
 
@@ -21,6 +20,7 @@ from maps.services import (
     save_layout_version,
 )
 from orders.models import TransportOrder
+from tests.factories import user_with_role
 from tests.maps.support import lif
 from tests.maps.zones_support import box
 
@@ -238,14 +238,14 @@ def post_json(client: Client, url: str, payload: Any) -> Any:
 def test_pages_need_a_staff_login(empty_map: Map) -> None:
     client = Client()
     anonymous = client.get(f"/layouts/{empty_map.pk}/edit/")
-    user = get_user_model().objects.create_user("driver", password="pw")
+    user = user_with_role("operator", "driver", password="pw")  # no MANAGE_LAYOUTS
     client.force_login(user)
     not_staff = client.get(f"/layouts/{empty_map.pk}/edit/")
     save = post_json(client, f"/layouts/{empty_map.pk}/save/", small_payload())
 
     assert anonymous.status_code == 302
-    assert "/admin/login/" in anonymous["Location"]
-    assert not_staff.status_code == 302
+    assert "/accounts/login/" in anonymous["Location"]
+    assert not_staff.status_code == 403
     assert save.status_code == 403
     assert not Node.objects.exists()
 

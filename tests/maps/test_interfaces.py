@@ -3,13 +3,13 @@
 import json
 
 import pytest
-from django.contrib.auth import get_user_model
 from django.core.files.uploadedfile import SimpleUploadedFile
 from django.core.management import CommandError, call_command
 from rest_framework.test import APIClient
 
 from maps.models import Map, Node, Site
 from maps.services import import_lif
+from tests.factories import user_with_role
 from tests.maps.support import example, lif, row_counts
 
 pytestmark = pytest.mark.django_db
@@ -49,7 +49,7 @@ def test_api_upload_of_a_json_body_with_errors_is_422_with_paths_and_writes_noth
 
 def test_api_upload_needs_staff(db) -> None:
     client = APIClient()
-    client.force_authenticate(get_user_model().objects.create_user("erp"))
+    client.force_authenticate(user_with_role("operator", "erp"))
 
     response = client.post("/api/v1/lif/import/", example("10.1_"), format="json")
 

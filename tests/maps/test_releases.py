@@ -5,7 +5,6 @@ import hashlib
 import json
 
 import pytest
-from django.contrib.auth import get_user_model
 from django.urls import reverse
 from rest_framework.test import APIClient
 
@@ -19,6 +18,7 @@ from maps.models import Map, MapRelease
 from maps.selectors import current_releases, release_by_token
 from maps.services import create_layout, create_zone, distribute_release, release_map
 from robots.models import Vehicle
+from tests.factories import user_with_role
 from tests.maps.zones_support import box
 
 pytestmark = pytest.mark.django_db
@@ -121,7 +121,7 @@ def test_the_api_releases_and_distributes_for_staff_only(api, layout, commands) 
     assert "no nodes" in refused.json()["detail"]
 
     reader = APIClient()
-    reader.force_authenticate(get_user_model().objects.create_user("reader", password="pw"))
+    reader.force_authenticate(user_with_role("operator", "reader", password="pw"))
     assert reader.get("/api/v1/map-releases/").status_code == 200
     assert reader.post("/api/v1/map-releases/", {"map": "demo"}, format="json").status_code == 403
     assert MapRelease.objects.count() == 1

@@ -3,12 +3,12 @@
 import json
 
 import pytest
-from django.contrib.auth import get_user_model
 from rest_framework.test import APIClient
 
 from maps.models import Map, Station, VehicleType, Zone
 from maps.selectors import export_map_lif, load_graph
 from maps.services import create_zone, import_lif
+from tests.factories import user_with_role
 from tests.maps.zones_support import box
 from traffic import NoRouteError
 
@@ -67,7 +67,7 @@ def test_api_answers_400_per_field_for_zone_data_that_breaks_its_type(api, demo_
 
 
 def test_only_staff_change_zones_through_the_api(demo_map: Map) -> None:
-    user = get_user_model().objects.create_user("viewer", password="pw")
+    user = user_with_role("operator", "viewer", password="pw")  # reads layouts, changes none
     client = APIClient()
     client.force_authenticate(user)
 

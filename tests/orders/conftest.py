@@ -5,6 +5,7 @@ from typing import Any
 import pytest
 from rest_framework.test import APIClient
 
+from fleet.roles import ALL_API_SCOPES
 from maps.models import Map, Station
 from orders import services
 from orders.models import IntegrationClient
@@ -24,7 +25,7 @@ def sent_commands(monkeypatch: pytest.MonkeyPatch) -> list[tuple[str, dict[str, 
 
 @pytest.fixture
 def erp(db: None) -> IntegrationClient:
-    return services.create_integration_client(name="erp")
+    return services.create_integration_client(name="erp", scopes=ALL_API_SCOPES)
 
 
 @pytest.fixture

@@ -3,13 +3,12 @@
 from datetime import timedelta
 
 import pytest
-from django.contrib.auth import get_user_model
 from django.utils import timezone
 from rest_framework.test import APIClient
 
 from orders import services
 from orders.models import TransportOrder
-from tests.factories import VehicleFactory
+from tests.factories import VehicleFactory, user_with_role
 
 Status = TransportOrder.Status
 
@@ -236,7 +235,7 @@ def test_the_token_key_is_stored_only_as_a_hash(erp) -> None:
 
 
 def test_browser_sessions_still_work(db, demo_map) -> None:
-    staff = get_user_model().objects.create_user("staff", password="pw-123456")
+    staff = user_with_role("operator", "staff", password="pw-123456")
     browser = APIClient()
     browser.force_login(staff)  # a session cookie, as a browser has after the login form
 

@@ -87,7 +87,7 @@ def test_a_failed_request_frees_its_key(api, demo_map) -> None:
 
 
 def test_keys_belong_to_one_client(api, demo_map) -> None:
-    other_client = services.create_integration_client(name="wms")
+    other_client = services.create_integration_client(name="wms", scopes=["orders:write"])
     other = APIClient()
     other.credentials(
         HTTP_AUTHORIZATION=f"Bearer {services.issue_api_token(client=other_client)[1]}"
@@ -126,7 +126,7 @@ def test_old_keys_are_pruned(api, demo_map) -> None:
 @pytest.mark.django_db(transaction=True)
 def test_concurrent_retries_over_http_create_exactly_one_order_per_key(live_server) -> None:
     create_layout(spec=warehouse_layout(columns=6, rows=4))
-    client = services.create_integration_client(name="erp-load")
+    client = services.create_integration_client(name="erp-load", scopes=["orders:write"])
     key = services.issue_api_token(client=client)[1]
     url = f"{live_server.url}/api/v1/orders/"
 

@@ -20,6 +20,7 @@ from schemathesis.specs.openapi.checks import (
     status_code_conformance,
 )
 
+from fleet.roles import ALL_API_SCOPES
 from maps.demo import warehouse_layout
 from maps.services import create_layout
 from orders import services
@@ -90,7 +91,7 @@ def fuzzed_api(db, monkeypatch):
     layout = create_layout(spec=warehouse_layout(columns=6, rows=4))
     for node in ("A1.1", "A2.2", "A4.1"):
         VehicleFactory(last_node_id=node, last_seen=timezone.now())
-    client = services.create_integration_client(name="fuzzer")
+    client = services.create_integration_client(name="fuzzer", scopes=ALL_API_SCOPES)
     key = services.issue_api_token(client=client)[1]
     stations = {s.station_id: s for s in layout.stations.all()}
     for pick, drop in (("PICK-1", "DROP-1"), ("PICK-2", "DROP-3")):

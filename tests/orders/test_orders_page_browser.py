@@ -84,9 +84,11 @@ def test_staff_create_change_and_cancel_a_multi_stop_order(
         page.select_option("#id_step-2-operation", "DROP")
         page.fill("#id_external_ref", "TAB-1")
         page.tap("#order-create button[type=submit]")
-        page.wait_for_url(f"{base}/orders/")
-        row = page.locator("#orders-table tbody tr").first
+        page.wait_for_url(f"{base}/orders/")  # the board
         assert "created" in page.locator(".messages").inner_text()
+        assert "TAB-1" in page.locator(".board").inner_text()
+        page.click("nav.orders-tabs >> text=All orders")
+        row = page.locator("#orders-table tbody tr").first
         assert row.locator(".steps li").all_inner_texts() == [
             "PICK-1 pick",
             "PICK-3 detectObject",

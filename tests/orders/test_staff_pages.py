@@ -2,24 +2,18 @@
 
 import pytest
 from django.conf import settings
-from django.contrib.auth.models import Permission, User
 from django.shortcuts import resolve_url
 from django.test import Client
 
 from maps.models import Station
 from orders import services
 from orders.models import OrderEvent, RecurringOrder, TransportOrder
-from tests.factories import VehicleFactory
+from tests.factories import VehicleFactory, user_with_role
 
 
 @pytest.fixture
 def staff(db: None) -> Client:
-    user = User.objects.create_user("lena", password="pw-lena-1")
-    user.user_permissions.add(
-        *Permission.objects.filter(
-            codename__in=["add_transportorder", "change_transportorder", "add_recurringorder"]
-        )
-    )
+    user = user_with_role("operator", "lena", password="pw-lena-1")
     client = Client()
     client.force_login(user)
     return client
@@ -112,7 +106,7 @@ def test_staff_cancel_reprioritise_and_reassign(staff, demo_map) -> None:
 def test_changes_need_the_permission(db, demo_map) -> None:
     order = pick_drop(demo_map)
     client = Client()
-    client.force_login(User.objects.create_user("viewer", password="pw-viewer-1"))
+    client.force_login(user_with_role("manager", "viewer"))  # reads operations, changes none
 
     assert client.get("/orders/").status_code == 200
     assert client.post(f"/orders/{order.pk}/cancel/").status_code == 403

@@ -5,7 +5,6 @@ import io
 from datetime import UTC, datetime, timedelta
 
 import pytest
-from django.contrib.auth import get_user_model
 from django.db.models import Sum
 from django.test import Client
 
@@ -14,6 +13,7 @@ from orders.models import TransportOrder
 from reports.models import LEAD_TIME_BUCKETS, ErrorCount, LeadTimeCount, VehicleHour
 from reports.services import SETTLE, bucket_of, roll_up_orders, sample_vehicles
 from robots.models import Vehicle
+from tests.factories import user_with_role
 
 pytestmark = pytest.mark.django_db
 T0 = datetime(2026, 11, 20, 8, 0, tzinfo=UTC)
@@ -141,7 +141,7 @@ def test_the_sampler_turns_looks_into_time_by_state_distance_and_energy(demo_map
 @pytest.fixture
 def manager_client() -> Client:
     client = Client()
-    client.force_login(get_user_model().objects.create_user("manager"))
+    client.force_login(user_with_role("manager"))
     return client
 
 

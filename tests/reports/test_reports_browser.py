@@ -6,11 +6,11 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from django.contrib.auth import get_user_model
 from django.utils import timezone
 
 from reports.history import generate_history
 from tests.browser import CHROMIUM, CHROMIUM_ARGS, skip_or_fail
+from tests.factories import user_with_role
 
 pytestmark = [pytest.mark.browser, pytest.mark.django_db(transaction=True)]
 SCREENSHOT = Path("/tmp/reports.png")
@@ -30,7 +30,7 @@ def chromium() -> str:
 def test_a_manager_sees_the_charts_and_downloads_a_csv(live_server: Any, chromium: str) -> None:
     from playwright.sync_api import sync_playwright
 
-    get_user_model().objects.create_user("manager", password="report-reader-pw")
+    user_with_role("manager", "manager", password="report-reader-pw")
     generate_history(vehicles=5, days=3, orders_per_hour=4)
     today = timezone.localdate()
     url = f"/reports/?start={today - timedelta(days=3)}&end={today}"
@@ -47,7 +47,7 @@ def test_a_manager_sees_the_charts_and_downloads_a_csv(live_server: Any, chromiu
             page.fill("#id_password", "report-reader-pw")
             page.click("button[type=submit]")
             page.wait_for_selector("svg.chart rect.bar-finished")
-            assert page.locator("svg.chart").count() == 4
+            assert page.locator("svg.chart").count() == 5  # with the traffic-wait chart
             assert page.locator("#utilisation svg.chart rect.bar-busy").count() == 5
             page.screenshot(path=str(SCREENSHOT), full_page=True)
             with page.expect_download() as download_info:

@@ -1,10 +1,9 @@
 """The vehicle read API."""
 
 import pytest
-from django.contrib.auth import get_user_model
 from rest_framework.test import APIClient
 
-from tests.factories import VehicleFactory
+from tests.factories import VehicleFactory, user_with_role
 
 pytestmark = pytest.mark.django_db
 
@@ -12,7 +11,7 @@ pytestmark = pytest.mark.django_db
 @pytest.fixture
 def api() -> APIClient:
     client = APIClient()
-    client.force_authenticate(get_user_model().objects.create_user("viewer"))
+    client.force_authenticate(user_with_role("operator", "viewer"))
     return client
 
 

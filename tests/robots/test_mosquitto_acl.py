@@ -257,6 +257,8 @@ def test_the_generated_files_hold_only_enabled_logins_and_refuse_wildcards(tmp_p
     assert "allow_anonymous false" in config
     assert "listener 8883" in config
     assert "certfile /c.pem" in config
+    # control subscribes to the whole fleet: ~10 s of 1,000 vehicles' messages (docs/LOAD.md)
+    assert "\nmax_queued_messages 20000\n" in config
     assert "Acme_AGV-9:$7$101$" in files.passwords.read_text()
     assert "AGV-10" not in files.passwords.read_text() + files.acl.read_text()
     with pytest.raises(ValueError, match="wildcard|'\\+'"):

@@ -1,4 +1,4 @@
-"""`manage.py run_control`: the master control process."""
+"""`manage.py run_control`: the master control process, as leader or standby."""
 
 import signal
 from typing import Any
@@ -6,17 +6,36 @@ from typing import Any
 from django.conf import settings
 from django.core.management.base import BaseCommand
 
+from control.health import LeaderHeartbeat, start_health_server
+from control.leader import Leadership, conninfo_from_settings
 from control.service import build_control_loop
+from control.standby import StandbyControl
 
 
 class Command(BaseCommand):
-    help = "Run the master control: VDA 5050 in and out, live fleet model, order execution."
+    help = (
+        "Run the master control: VDA 5050 in and out, live fleet model, order execution. "
+        "Start two for a standby pair: one leads (PostgreSQL advisory lock), the other waits."
+    )
 
     def handle(self, *args: Any, **options: Any) -> None:
-        loop = build_control_loop()
-        signal.signal(signal.SIGTERM, lambda *_: loop.stop())
-        signal.signal(signal.SIGINT, lambda *_: loop.stop())
+        database = settings.DATABASES["default"]
+        leadership = None
+        if database["ENGINE"] == "django.db.backends.postgresql":
+            leadership = Leadership(conninfo_from_settings(database))
+        control = StandbyControl(leadership, build_control_loop)
+        health = start_health_server(settings.CONTROL_HEALTH_PORT, control.status)
+        heartbeat = LeaderHeartbeat(control.status).start()
+        signal.signal(signal.SIGTERM, lambda *_: control.stop())
+        signal.signal(signal.SIGINT, lambda *_: control.stop())
         self.stdout.write(
-            f"control: broker {settings.MQTT_URL}, interface {settings.VDA5050_INTERFACE}"
+            f"control: broker {settings.MQTT_URL}, interface {settings.VDA5050_INTERFACE}, "
+            f"{'leader or standby' if leadership else 'single process'}, "
+            f"health port {health.port if health else 'off'}"
         )
-        loop.run()  # returns after a clean shutdown
+        try:
+            control.run()  # returns after a clean shutdown
+        finally:
+            heartbeat.stop()
+            if health is not None:
+                health.stop()

@@ -19,6 +19,7 @@ from django.core.management.base import BaseCommand, CommandParser
 
 from control.demo import (
     DEMO_PASSWORD,
+    DEMO_ROLE_USERS,
     DEMO_USER,
     Children,
     EmbeddedBeat,
@@ -65,6 +66,7 @@ class Command(BaseCommand):
                     f"{options['vehicles']} vehicles, ready in {time.monotonic() - started:.1f} s"
                 )
             )
+            self.stdout.write(f"Role logins (password = name): {', '.join(DEMO_ROLE_USERS)}")
             sys.stdout.flush()
             if settings.REDIS_URL:
                 self._run_production_topology(children, options)

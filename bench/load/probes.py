@@ -1,0 +1,236 @@
+"""The measuring processes of the load benchmark, each writing one JSON file at the end.
+
+    python -m bench.load.probes raw --broker HOST:PORT --interface I --start T --seconds S --out F
+    python -m bench.load.probes api ... --url URL --token TOKEN --layout F --rate R --vehicles N
+    python -m bench.load.probes ws ... --url URL --session KEY
+
+All three wait until wall time `--start` (epoch seconds), measure for `--seconds`, then write.
+`raw` is the floor for `control`: a bare paho client on the same topics (same QoS) that only
+counts, and, on the order topic, the time from a vehicle's last state to an order update
+for it (the state → order-update latency, broker hops included). `api` posts transport
+orders at a steady rate and times POST → the order's first message on the order topic.
+`ws` is a browser on the live page: websocket messages and vehicle rows per second.
+"""
+
+import argparse
+import asyncio
+import json
+import os
+import random
+import time
+import urllib.request
+import uuid
+from pathlib import Path
+from typing import Any
+
+import msgspec
+import paho.mqtt.client as mqtt
+from paho.mqtt.enums import CallbackAPIVersion
+
+CONTROL_TOPICS = (("state", 0), ("connection", 1), ("factsheet", 0), ("visualization", 0))
+
+
+def percentile(samples: list[float], q: float) -> float | None:
+    if not samples:
+        return None
+    ordered = sorted(samples)
+    return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))]
+
+
+def ms(value: float | None) -> float | None:
+    return None if value is None else round(value * 1e3, 2)
+
+
+def _client(name: str, host: str, port: int) -> mqtt.Client:
+    client = mqtt.Client(CallbackAPIVersion.VERSION2, client_id=f"loadbench-{name}-{os.getpid()}")
+    client.connect(host, port, 30)
+    return client
+
+
+def _wait_until(start: float) -> None:
+    time.sleep(max(0.0, start - time.time()))
+
+
+def raw(args: argparse.Namespace) -> dict[str, Any]:
+    """Count what paho alone receives on control's topics; time state → order update."""
+    host, port = args.broker.split(":")
+    client = _client("raw", host, int(port))
+    iface = args.interface
+    window = {"on": False}
+    counts: dict[str, int] = dict.fromkeys((k for k, _ in CONTROL_TOPICS), 0)
+    last_state: dict[str, float] = {}
+    latencies: list[float] = []
+    new_orders = [0]
+
+    def on_message(_c: mqtt.Client, _u: Any, message: mqtt.MQTTMessage) -> None:
+        now = time.perf_counter()
+        topic = message.topic
+        kind = topic[topic.rfind("/") + 1 :]
+        if kind == "state":
+            last_state[topic[:-6]] = now
+        elif kind == "order":
+            if window["on"]:
+                update = msgspec.json.decode(message.payload).get("orderUpdateId", 0)
+                sent = last_state.get(topic[:-6])
+                if update == 0:
+                    new_orders[0] += 1
+                elif sent is not None:
+                    latencies.append(now - sent)
+            return
+        if window["on"]:
+            counts[kind] += 1
+
+    client.on_message = on_message
+    client.subscribe([(f"{iface}/+/+/+/{k}", q) for k, q in CONTROL_TOPICS])
+    client.subscribe(f"{iface}/+/+/+/order", 0)
+    client.loop_start()
+    _wait_until(args.start)
+    window["on"], cpu0, t0 = True, time.process_time(), time.perf_counter()
+    time.sleep(args.seconds)
+    window["on"], cpu1, t1 = False, time.process_time(), time.perf_counter()
+    client.disconnect()
+    client.loop_stop()
+    wall = t1 - t0
+    total = sum(counts.values())
+    return {
+        "seconds": round(wall, 2),
+        "messages": total,
+        "messages_per_s": round(total / wall, 1),
+        "by_topic_per_s": {k: round(v / wall, 1) for k, v in counts.items()},
+        "cpu_share": round((cpu1 - cpu0) / wall, 4),
+        "order_updates": len(latencies),
+        "new_orders": new_orders[0],
+        "state_to_update_p50_ms": ms(percentile(latencies, 0.5)),
+        "state_to_update_p99_ms": ms(percentile(latencies, 0.99)),
+    }
+
+
+def api(args: argparse.Namespace) -> dict[str, Any]:
+    """POST transport orders at `rate`/s; time POST → the order's first message on MQTT."""
+    layout = json.loads(Path(args.layout).read_text())
+    fleet = json.loads(Path(args.fleet).read_text())  # [serial number, home park station]
+    picks = [s["id"] for s in layout["stations"] if s["kind"] == "PICK"]
+    drops = [s["id"] for s in layout["stations"] if s["kind"] == "DROP"]
+    rng = random.Random(7)
+    host, port = args.broker.split(":")
+    client = _client("api", host, int(port))
+    published: dict[str, float] = {}
+
+    def on_message(_c: mqtt.Client, _u: Any, message: mqtt.MQTTMessage) -> None:
+        now = time.perf_counter()
+        data = msgspec.json.decode(message.payload)
+        if data.get("orderUpdateId") == 0:
+            published.setdefault(str(data.get("orderId")), now)
+
+    client.on_message = on_message
+    client.subscribe(f"{args.interface}/+/+/+/order", 0)
+    client.loop_start()
+    posted: dict[str, float] = {}
+    post_seconds: list[float] = []
+    errors: list[str] = []
+    _wait_until(args.start)
+    t0 = time.perf_counter()
+    end = t0 + args.seconds
+    n = 0
+    while (due := t0 + n / args.rate) < end:
+        time.sleep(max(0.0, due - time.perf_counter()))
+        serial, home = fleet[n % len(fleet)]
+        body = {
+            "steps": [
+                {"station": rng.choice(picks), "operation": "PICK"},
+                {"station": rng.choice(drops), "operation": "DROP"},
+                {"station": home, "operation": "ACTION", "action_type": "stopCharging"},
+            ],
+            "intended_vehicle": serial,
+            "external_ref": f"LOAD-{n}",
+        }
+        request = urllib.request.Request(
+            f"{args.url}/api/v1/orders/",
+            data=json.dumps(body).encode(),
+            method="POST",
+            headers={
+                "Authorization": f"Bearer {args.token}",
+                "Content-Type": "application/json",
+                "Idempotency-Key": str(uuid.uuid4()),
+            },
+        )
+        started = time.perf_counter()
+        try:
+            with urllib.request.urlopen(request, timeout=30) as response:
+                order_id = f"TO-{json.loads(response.read())['id']}"
+            posted[order_id] = started
+            post_seconds.append(time.perf_counter() - started)
+        except Exception as exc:  # counted and reported, the run goes on
+            errors.append(str(exc)[:200])
+        n += 1
+    time.sleep(args.grace)
+    client.disconnect()
+    client.loop_stop()
+    delays = [published[o] - t for o, t in posted.items() if o in published]
+    return {
+        "posted": len(posted),
+        "errors": len(errors),
+        "first_errors": errors[:3],
+        "published": len(delays),
+        "post_p50_ms": ms(percentile(post_seconds, 0.5)),
+        "post_p95_ms": ms(percentile(post_seconds, 0.95)),
+        "post_to_published_p50_ms": ms(percentile(delays, 0.5)),
+        "post_to_published_p95_ms": ms(percentile(delays, 0.95)),
+        "post_to_published_max_ms": ms(max(delays) if delays else None),
+    }
+
+
+def ws(args: argparse.Namespace) -> dict[str, Any]:
+    """Count live-page websocket messages and vehicle rows per second."""
+    import websockets
+
+    url = args.url.replace("http://", "ws://") + "/ws/live/"
+    headers = {"Cookie": f"sessionid={args.session}", "Origin": args.url}
+    counts = {"messages": 0, "vehicle_rows": 0, "bytes": 0}
+
+    async def run() -> float:
+        async with websockets.connect(url, additional_headers=headers, max_size=None) as socket:
+            _wait_until(args.start)
+            t0 = time.perf_counter()
+            end = t0 + args.seconds
+            while (left := end - time.perf_counter()) > 0:
+                try:
+                    text = await asyncio.wait_for(socket.recv(), timeout=left)
+                except TimeoutError:
+                    break
+                counts["messages"] += 1
+                counts["bytes"] += len(text)
+                data = json.loads(text)
+                counts["vehicle_rows"] += len(data.get("payload", {}).get("vehicles", []))
+            return time.perf_counter() - t0
+
+    wall = asyncio.run(run())
+    return {
+        "messages_per_s": round(counts["messages"] / wall, 1),
+        "vehicle_rows_per_s": round(counts["vehicle_rows"] / wall, 1),
+        "kbytes_per_s": round(counts["bytes"] / wall / 1024, 1),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("probe", choices=("raw", "api", "ws"))
+    parser.add_argument("--broker", default="127.0.0.1:1883")
+    parser.add_argument("--interface", default="uagv")
+    parser.add_argument("--start", type=float, required=True, help="epoch seconds")
+    parser.add_argument("--seconds", type=float, required=True)
+    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--url", default="")
+    parser.add_argument("--token", default="")
+    parser.add_argument("--session", default="")
+    parser.add_argument("--layout", default="")
+    parser.add_argument("--rate", type=float, default=1.0)
+    parser.add_argument("--fleet", default="", help="JSON [[serial, home station], ...]")
+    parser.add_argument("--grace", type=float, default=5.0, help="wait for the last orders")
+    args = parser.parse_args()
+    result = {"raw": raw, "api": api, "ws": ws}[args.probe](args)
+    args.out.write_text(json.dumps(result, indent=2))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,150 @@
+"""What `control` counts, and the snapshot the web `/metrics` page renders (fleet.metrics).
+
+The hot path only adds to in-memory counters and fixed-bucket histograms (a dict increment
+and a bisect per message); a background thread writes a JSON snapshot to Redis every few
+seconds, so a scrape never touches the paho thread. Counted here: messages by topic kind,
+time spent handling a message, and the latency from a state message's arrival to the order
+(update) it made `control` publish. The controller's own protocol counters (decode errors,
+rejections, sent messages, …) go out with the snapshot as they are.
+"""
+
+import bisect
+import json
+import logging
+import os
+import threading
+import time
+from collections import Counter
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import paho.mqtt.client as mqtt
+
+if TYPE_CHECKING:
+    from control.controller import Controller
+    from control.runner import MqttLink
+
+logger = logging.getLogger(__name__)
+
+SNAPSHOT_KEY = "fleet:control:metrics"
+SNAPSHOT_INTERVAL = 2.0  # seconds between snapshots in Redis
+# Seconds; Prometheus `le` bounds. Fine at the low end: the target is p99 <= 50 ms.
+LATENCY_BUCKETS = (0.0001, 0.00025, 0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 1.0)
+
+
+class Histogram:
+    """Cumulative-at-render histogram with fixed bounds; `observe` is a bisect and two adds."""
+
+    def __init__(self, bounds: tuple[float, ...] = LATENCY_BUCKETS) -> None:
+        self.bounds = bounds
+        self.counts = [0] * (len(bounds) + 1)  # the last one is +Inf
+        self.total = 0.0
+
+    def observe(self, seconds: float) -> None:
+        self.counts[bisect.bisect_left(self.bounds, seconds)] += 1
+        self.total += seconds
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"bounds": list(self.bounds), "counts": list(self.counts), "sum": self.total}
+
+
+class ControlMetrics:
+    """Messages by topic, handling time and state → order latency of one `control` process."""
+
+    def __init__(self, controller: "Controller") -> None:
+        self.controller = controller
+        self.by_topic: Counter[str] = Counter()
+        self.handling = Histogram()
+        self.state_to_order = Histogram()
+        self.started = time.time()
+        self._current: tuple[int, float] | None = None  # (paho thread, arrival) while handling
+        self.link_connected: threading.Event | None = None
+
+    def instrument(self, link: "MqttLink") -> None:
+        """Wrap the link's message callback and the controller's publish function."""
+        handle: Callable[[mqtt.Client, Any, mqtt.MQTTMessage], None] | None
+        handle = link.client.on_message
+        assert handle is not None, "instrument the link after MqttLink set its callback"
+        publish = self.controller.publisher.publish
+        self.link_connected = link.connected
+
+        def on_message(client: mqtt.Client, userdata: Any, message: mqtt.MQTTMessage) -> None:
+            arrived = time.perf_counter()
+            topic = message.topic
+            kind = topic[topic.rfind("/") + 1 :]
+            self.by_topic[kind] += 1
+            self._current = (threading.get_ident(), arrived) if kind == "state" else None
+            try:
+                handle(client, userdata, message)
+            finally:
+                self._current = None
+                self.handling.observe(time.perf_counter() - arrived)
+
+        def timed_publish(topic: str, payload: bytes, qos: int) -> None:
+            publish(topic, payload, qos)
+            current = self._current
+            if (
+                current is not None
+                and topic.endswith("/order")
+                and current[0] == threading.get_ident()
+            ):
+                self.state_to_order.observe(time.perf_counter() - current[1])
+
+        link.client.on_message = on_message
+        self.controller.publisher.publish = timed_publish
+
+    def snapshot(self) -> dict[str, Any]:
+        """Plain data for Redis: counters, histograms and the live fleet by state."""
+        controller = self.controller
+        with controller.lock:
+            vehicles = list(controller.fleet.vehicles.values())
+            links: Counter[str] = Counter(str(v.last_link.value) for v in vehicles)
+            executing = sum(1 for v in vehicles if v.execution is not None)
+            per_vehicle: Counter[str] = Counter()  # header gaps = messages lost on the way
+            for vehicle in vehicles:
+                per_vehicle.update(vehicle.session.counters)
+        return {
+            "time": time.time(),
+            "started": self.started,
+            "pid": os.getpid(),
+            "broker_connected": bool(self.link_connected and self.link_connected.is_set()),
+            "counters": dict(controller.counters),
+            "vehicle_counters": dict(per_vehicle),
+            "messages_by_topic": dict(self.by_topic),
+            "handling_seconds": self.handling.as_dict(),
+            "state_to_order_seconds": self.state_to_order.as_dict(),
+            "vehicles": len(vehicles),
+            "vehicles_by_link": dict(links),
+            "vehicles_executing": executing,
+            "cpu_seconds": time.process_time(),
+        }
+
+
+def start_snapshots(
+    metrics: ControlMetrics,
+    redis_url: str,
+    *,
+    interval: float = SNAPSHOT_INTERVAL,
+    until: threading.Event | None = None,
+) -> threading.Thread | None:
+    """Write `metrics.snapshot()` to Redis every `interval` s until `until` is set (a daemon
+    thread); None: no Redis."""
+    until = until or threading.Event()
+    if not redis_url:
+        return None
+    import redis
+
+    client = redis.Redis.from_url(redis_url, socket_timeout=5)
+
+    def run() -> None:
+        while not until.is_set():
+            try:
+                data = json.dumps(metrics.snapshot())
+                client.set(SNAPSHOT_KEY, data, ex=max(10, int(interval * 5)))
+            except Exception:  # metrics must never take control down
+                logger.warning("metrics snapshot failed", exc_info=True)
+            until.wait(interval)
+
+    thread = threading.Thread(target=run, name="control-metrics", daemon=True)
+    thread.start()
+    return thread
