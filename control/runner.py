@@ -107,7 +107,10 @@ class ControlLoop:
         )
         try:
             while not self._stop.is_set() and not self._lost():
-                commands = self._safely(self.receive_commands, 0.05) or []
+                # Wait for commands until the next timer is due (at most the broadcast interval):
+                # a command still wakes the loop at once, and an idle loop does not spin.
+                wait = min(due.values()) - time.monotonic()
+                commands = self._safely(self.receive_commands, min(max(wait, 0.01), 0.2)) or []
                 for command in commands:
                     self._safely(self.controller.execute, command)
                 if any(str(c.get("kind", "")).startswith("maps.") for c in commands):

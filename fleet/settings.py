@@ -112,7 +112,11 @@ if DATABASES["default"]["ENGINE"] == "django.db.backends.sqlite3":
         "init_command": "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;",
     }
 else:
-    DATABASES["default"].setdefault("CONN_MAX_AGE", 60)
+    # 0 (close at the end of each request) by default: under ASGI daphne runs views in a thread
+    # pool, and persistent connections pile up per thread until PostgreSQL refuses new clients
+    # (the idempotency fault row hit "too many clients" with 60). Long-running processes
+    # (control, workers) reconnect cheaply once per flush or task.
+    DATABASES["default"].setdefault("CONN_MAX_AGE", env.int("DB_CONN_MAX_AGE", default=0))
     DATABASES["default"].setdefault("CONN_HEALTH_CHECKS", True)
 DEFAULT_AUTO_FIELD = "django.db.models.BigAutoField"
 

@@ -73,6 +73,7 @@ class SimStats:
     wait_cycles: int = 0
     stalls: int = 0  # no progress for stall_after s, and neither the vehicle it waits for
     long_waits: int = 0  # no progress for stall_after s behind a vehicle that is driving
+    stall_chains: list[str] = field(default_factory=list)  # per stall: its wait-for chain
     plan_failures: int = 0
     moves: int = 0
     delays: int = 0
@@ -337,6 +338,29 @@ class Simulation:
                 self.stats.long_waits += 1
             else:
                 self.stats.stalls += 1
+                self.stats.stall_chains.append(self._describe_chain(car))
+
+    def _describe_chain(self, car: _Car) -> str:
+        """The stalled vehicle's wait-for chain, one line per vehicle (why it does not move)."""
+        lines, seen = [f"t={self.now:.0f}"], set()
+        while car.name not in seen:
+            seen.add(car.name)
+            v = self.manager.vehicle(car.name)
+            step = v.base + 1
+            holds = (v.edge_holds[step], v.node_holds[step]) if step < len(v.route) else ()
+            ahead = [repr(o) for h in holds if h for o in self.manager.table.blockers(h)]
+            lines.append(
+                f"{car.name} at {self.manager.layout.node_ids[v.route[v.passed]]} "
+                f"passed {v.passed} base {v.base} route {len(v.route)} moving {car.moving} "
+                f"still {self.now - car.last_move:.0f}s ready_at {v.ready_at:.0f} "
+                f"goals {car.goals is not None} complete {v.complete} static {v.static} "
+                f"blocked_by {v.blocked_by} ahead {ahead}"
+            )
+            following = self.manager.waiting_for(car.name)
+            if not following:
+                break
+            car = self._by_name[following[0]]
+        return " | ".join(lines)
 
     def _root(self, car: _Car) -> _Car:
         """The end of the chain of vehicles `car` waits for."""

@@ -57,6 +57,7 @@ class TrafficManager(FleetQueries):
         weight: float = 1.0,
         replan_after: float = 5.0,
         retime_slack: float = 2.0,
+        quick_search: tuple[int, float] | None = None,
     ) -> None:
         self.layout = layout
         self.classes = tuple(classes)
@@ -68,6 +69,10 @@ class TrafficManager(FleetQueries):
         self.weight = weight  # heuristic weight of SIPP (1: earliest arrival)
         self.replan_after = replan_after  # s at a decision point before tick() re-plans
         self.retime_slack = retime_slack  # s a plan may run early before tick() re-times it
+        # (expansions, weight): a search that needs more expansions than that at `weight` is
+        # repeated with the larger weight (near-greedy), which bounds the planning-time tail
+        # in congestion at the price of a later arrival for those few plans
+        self.quick_search = quick_search
         self._vehicles: list[Vehicle] = []
         self._index: dict[str, int] = {}
         self._waiters: dict[int, set[int]] = {}
@@ -168,19 +173,21 @@ class TrafficManager(FleetQueries):
         start = v.route[b]
         t0 = max(now, v.ready_at) if v.passed == b else now + self._remaining(v, graph)
         deadline = self.table.first_other_start(start, v.idx)
-        path = search(
-            graph,
-            self.table,
-            v.idx,
-            start,
-            v.headings[b],
-            t0,
-            deadline,
-            goals,
-            partial=partial,
-            max_expansions=self.max_expansions,
-            weight=self.weight,
-        )
+        args = (graph, self.table, v.idx, start, v.headings[b], t0, deadline, goals)
+        if self.quick_search is None:
+            path = search(
+                *args, partial=partial, max_expansions=self.max_expansions, weight=self.weight
+            )
+        else:
+            cap, fallback = self.quick_search
+            path = search(*args, partial=partial, max_expansions=cap, weight=self.weight)
+            if path is None or not path.complete:
+                path = (
+                    search(
+                        *args, partial=partial, max_expansions=self.max_expansions, weight=fallback
+                    )
+                    or path
+                )
         if path is None:
             return None
         releases = self._commit(v, path, goals, now, new=b == len(v.route) - 1)
@@ -210,6 +217,7 @@ class TrafficManager(FleetQueries):
                 table.remove(v.node_holds[i])
             v.truncate(b)
         v.node_holds[b].end = path.arrive[1] if len(path.nodes) > 1 else INF
+        table.ended(v.node_holds[b])
         for j in range(1, len(path.nodes)):
             i = b + j
             u, n = path.nodes[j - 1], path.nodes[j]

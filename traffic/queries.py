@@ -102,6 +102,7 @@ class FleetQueries:
         affected: dict[int, None] = {}
         for hold in held:
             hold.end = INF
+            self.table.ended(hold)
             for r in hold.conflicts:
                 for other in self.table.blocked[r]:
                     if other.vehicle != v.idx and not other.released:

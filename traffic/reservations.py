@@ -66,6 +66,10 @@ class ReservationTable:
     def __init__(self, resource_count: int) -> None:
         self.blocked: list[list[Hold]] = [[] for _ in range(resource_count)]
         self.unsorted: set[int] = set()  # lists whose keys moved (re-timing); sorted on use
+        # per list: the gaps between all holds and the vehicles holding in it (SIPP asks for the
+        # same lists again and again; a vehicle without holds there gets the shared gaps)
+        self._gaps: dict[int, tuple[list[tuple[float, float]], set[int]]] = {}
+        self._stale: set[int] = set()  # lists whose cached gaps an end change made stale
 
     def sort(self, resource: int) -> None:
         """Restore key order in one list. Re-timing keeps conflicting holds in order, so this
@@ -73,6 +77,7 @@ class ReservationTable:
         if resource in self.unsorted:
             self.unsorted.discard(resource)
             self.blocked[resource].sort(key=_key)
+            self._gaps.pop(resource, None)
 
     def retimed(self, hold: Hold) -> None:
         """`hold.start` moved later: its lists need sorting before the next SIPP or insert."""
@@ -86,12 +91,14 @@ class ReservationTable:
             if r in self.unsorted:
                 self.sort(r)
             bisect.insort_right(self.blocked[r], hold, key=_key)
+            self._gaps.pop(r, None)
 
     def add_released(self, hold: Hold) -> None:
         """Put a hold the vehicle already occupies (a parked vehicle) at the front."""
         hold.released, hold.key = True, -INF
         for r in hold.conflicts:
             self.blocked[r].insert(0, hold)
+            self._gaps.pop(r, None)
 
     def release(self, hold: Hold) -> None:
         """Mark `hold` entered: nothing may be queued ahead of it any more."""
@@ -102,11 +109,17 @@ class ReservationTable:
             queue = self.blocked[r]
             queue.remove(hold)
             queue.insert(0, hold)
+            self._gaps.pop(r, None)
 
     def remove(self, hold: Hold) -> None:
         """Drop a hold: cleared by its vehicle, or an unreleased step replanned away."""
         for r in hold.conflicts:
             self.blocked[r].remove(hold)
+            self._gaps.pop(r, None)
+
+    def ended(self, hold: Hold) -> None:
+        """`hold.end` was changed in place: its lists' safe intervals are stale."""
+        self._stale.update(hold.conflicts)
 
     def blocker(self, hold: Hold) -> Hold | None:
         """The first other vehicle's hold queued ahead of `hold`, or None if it may be entered."""
@@ -131,10 +144,25 @@ class ReservationTable:
     def safe_intervals(self, resource: int, vehicle: int) -> list[tuple[float, float]]:
         """The gaps between other vehicles' holds on `resource`'s conflict set, as (from, to).
 
-        Released holds count from -inf: a plan may only be queued behind them.
+        Released holds count from -inf: a plan may only be queued behind them. The list
+        returned may be shared: do not change it.
         """
         if resource in self.unsorted:
             self.sort(resource)
+        if resource in self._stale:
+            self._stale.discard(resource)
+            self._gaps.pop(resource, None)
+        cached = self._gaps.get(resource)
+        if cached is None:
+            cached = self._gaps[resource] = (
+                self._between(resource, -1),
+                {h.vehicle for h in self.blocked[resource]},
+            )
+        if vehicle not in cached[1]:
+            return cached[0]
+        return self._between(resource, vehicle)
+
+    def _between(self, resource: int, vehicle: int) -> list[tuple[float, float]]:
         gaps: list[tuple[float, float]] = []
         free_from = -INF
         for hold in self.blocked[resource]:

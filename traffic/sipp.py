@@ -80,6 +80,16 @@ class ClassGraph:
                 keys[0] = count  # a node nobody drives into still gets a state
                 count += 1
         self.state_count = count
+        # per state: its node, heading key and moves (node, segment, travel, state, turn) with
+        # the turn precomputed: the search loop then does no dict or function lookups
+        self.node_of = [0] * count
+        self.key_of = [0] * count
+        for v, keys in enumerate(self.states):
+            for key, state in keys.items():
+                self.node_of[state], self.key_of[state] = v, key
+        self.moves: list[list[tuple[int, int, float, int, float]]] = [
+            self._moves(self.node_of[s], self.key_of[s]) for s in range(count)
+        ]
         arrive = count  # arrive(v) = count + v, the goal "whatever the heading"
         reverse: list[tuple[int, int, float]] = []
         for v, keys in enumerate(self.states):
@@ -95,6 +105,16 @@ class ClassGraph:
         self._reverse.sum_duplicates()
         self._tables: OrderedDict[tuple[tuple[int, float], ...], array[float]] = OrderedDict()
         self._cache = cache
+
+    def _moves(self, node: int, key: int) -> list[tuple[int, int, float, int, float]]:
+        return [
+            (w, seg, tau, self.states[w][w_key], self.turn(key, w_key))
+            for w, seg, tau, w_key in self.succ[node]
+        ]
+
+    def state(self, node: int, key: int) -> int:
+        """The state of `node` entered with heading `key`, or -1 if no edge enters it so."""
+        return self.states[node].get(key, -1)
 
     def to(self, goal: int) -> array[float]:
         """Seconds to `goal` from every (node, heading) state, alone on the layout (cached)."""
@@ -202,63 +222,75 @@ def search(
     if h_start == INF and not partial:
         return None
     cache: dict[int, list[tuple[float, float]]] = {}
-
-    def intervals(resource: int) -> list[tuple[float, float]]:
-        found = cache.get(resource)
-        if found is None:
-            found = cache[resource] = table.safe_intervals(resource, vehicle)
-        return found
+    safe_intervals, cost_to = table.safe_intervals, graph.cost_to
 
     final = goals[-1][0]
-    gaps = intervals(final)
+    gaps = cache[final] = safe_intervals(final, vehicle)
     if (not gaps or gaps[-1][1] != INF) and not partial:
         return None  # someone stays on the last goal for good
-    succ, turn, cost_to, states = graph.succ, graph.turn, graph.cost_to, graph.states
-    start_key = (start, heading, -1, 0)
-    parents: dict[tuple[int, int, int, int], tuple[tuple[int, int, int, int] | None, float]] = {
-        start_key: (None, -INF)
-    }
-    best: dict[tuple[int, int, int, int], float] = {start_key: t0}
-    heap = [(t0 + weight * (h_start if h_start < INF else 0.0), -t0, 0, start_key, deadline)]
-    nearest: tuple[float, float, tuple[int, int, int, int]] | None = None
+    # A search key is one int: (stage, state, interval index); `outside` is the start when its
+    # heading is no state of the graph (unknown, or no edge enters the start that way).
+    node_of, key_of, moves = graph.node_of, graph.key_of, graph.moves
+    outside = graph.state_count
+    start_state = graph.state(start, heading)
+    if start_state < 0:
+        start_state = outside
+    span = outside + 1
+    start_key = start_state << _SHIFT
+    parents: dict[int, tuple[int, float]] = {start_key: (-1, -INF)}
+    best: dict[int, float] = {start_key: t0}
+    h0 = t0 + weight * (h_start if h_start < INF else 0.0)
+    heap = [(h0, -t0, 0, start_key, deadline, start_state, 0)]
+    nearest: tuple[float, float, int] | None = None
     pushes = expansions = 0
+    pop, push, best_get = heapq.heappop, heapq.heappush, best.get
     while heap:
-        _, neg_t, _, key, end = heapq.heappop(heap)
+        _, neg_t, _, key, end, s, stage = pop(heap)
         t = -neg_t
-        if best.get(key, INF) < t:
+        if best_get(key, INF) < t:
             continue
         expansions += 1
         if expansions > max_expansions:
             break
-        u, hk, k, stage = key
+        if s == outside:
+            u, hk, out = start, heading, graph._moves(start, heading)
+        else:
+            u, hk, out = node_of[s], key_of[s], moves[s]
         if u == goals[stage][0]:
             if stage == last:
                 if end == INF:
-                    return _path(parents, best, key, goals, True)
+                    return _path(graph, parents, best, key, goals, True, start, heading)
             else:
                 t2 = t + goals[stage][1]
-                child = (u, hk, k, stage + 1)
-                if t2 < end and t2 < best.get(child, INF):
+                child = key + span * _UNIT
+                if t2 < end and t2 < best_get(child, INF):
                     best[child] = t2
                     parents[child] = (key, -INF)  # a dwell, not a move
                     pushes += 1
-                    h = cost_to(tables[stage + 1], u, hk)
-                    heapq.heappush(heap, (t2 + weight * h, -t2, pushes, child, end))
+                    h = tables[stage + 1][s] if s != outside else cost_to(tables[stage + 1], u, hk)
+                    push(heap, (t2 + weight * h, -t2, pushes, child, end, s, stage + 1))
         if partial and end == INF and stage == last:
-            score = cost_to(tables[last], u, hk)
+            score = tables[last][s] if s != outside else cost_to(tables[last], u, hk)
             if nearest is None or (score, t) < nearest[:2]:
                 nearest = (score, t, key)
         table_h = tables[stage]
-        for v, seg, tau, vk in succ[u]:
-            h = table_h[states[v][vk]]
+        base = stage * span
+        for v, seg, tau, vs_, turning in out:
+            h = table_h[vs_]
             if h == INF and not partial:
                 continue
-            earliest = t + turn(hk, vk)
+            earliest = t + turning
             latest = end - tau
             if earliest > latest:
                 continue
-            node_gaps = intervals(v)
-            for ws, we in intervals(seg):
+            node_gaps = cache.get(v)
+            if node_gaps is None:
+                node_gaps = cache[v] = safe_intervals(v, vehicle)
+            seg_gaps = cache.get(seg)
+            if seg_gaps is None:
+                seg_gaps = cache[seg] = safe_intervals(seg, vehicle)
+            child_base = (base + vs_) << _SHIFT
+            for ws, we in seg_gaps:
                 if ws > latest:
                     break
                 lo = earliest if earliest > ws else ws
@@ -272,28 +304,36 @@ def search(
                     arrive = dep + tau
                     if dep > hi or arrive >= ve:
                         continue
-                    child = (v, vk, idx, stage)
-                    if arrive < best.get(child, INF):
+                    child = child_base + idx + 1
+                    if arrive < best_get(child, INF):
                         best[child] = arrive
                         parents[child] = (key, dep)
                         pushes += 1
                         f = arrive + weight * (h if h < INF else 0.0)
-                        heapq.heappush(heap, (f, -arrive, pushes, child, ve))
+                        push(heap, (f, -arrive, pushes, child, ve, vs_, stage))
     if partial and nearest is not None and nearest[2] != start_key:
-        return _path(parents, best, nearest[2], goals, False)
+        return _path(graph, parents, best, nearest[2], goals, False, start, heading)
     return None
 
 
+_SHIFT = 24  # bits of the interval index in a search key
+_UNIT = 1 << _SHIFT
+
+
 def _path(
-    parents: dict[tuple[int, int, int, int], tuple[tuple[int, int, int, int] | None, float]],
-    best: dict[tuple[int, int, int, int], float],
-    key: tuple[int, int, int, int],
+    graph: ClassGraph,
+    parents: dict[int, tuple[int, float]],
+    best: dict[int, float],
+    key: int,
     goals: Sequence[tuple[int, float]],
     complete: bool,
+    start: int,
+    heading: int,
 ) -> Path:
-    chain: list[tuple[tuple[int, int, int, int], float, float]] = []
-    current: tuple[int, int, int, int] | None = key
-    while current is not None:
+    span = graph.state_count + 1
+    chain: list[tuple[int, float, float]] = []
+    current = key
+    while current >= 0:
         parent, dep = parents[current]
         chain.append((current, best[current], dep))
         current = parent
@@ -303,10 +343,12 @@ def _path(
     depart: list[float] = []
     headings: list[int] = []
     stops: list[int] = []
-    for (u, hk, _, _), t, dep in chain:
+    for k, t, dep in chain:
         if nodes and dep == -INF:
             stops.append(len(nodes) - 1)  # dwell at a goal on the way
             continue
+        s = (k >> _SHIFT) % span
+        u, hk = (start, heading) if s == graph.state_count else (graph.node_of[s], graph.key_of[s])
         if nodes:
             depart.append(dep)
         nodes.append(u)

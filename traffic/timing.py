@@ -84,6 +84,7 @@ def propagate(
             for hold in (edge, v.node_holds[i]):
                 if hold.end < arrive:
                     hold.end = arrive
+                    table.ended(hold)
                     _push_followers(table, hold, idx, heap)
             moved += 1
             i += 1
@@ -106,7 +107,11 @@ def _push_followers(
     except ValueError:
         return  # already cleared
     end = hold.end
-    for follower in queue[position + 1 :]:
+    ordered = hold.resource not in table.unsorted  # then keys ascend: stop at the first >= end
+    for k in range(position + 1, len(queue)):
+        follower = queue[k]
+        if follower.key >= end and ordered:
+            break
         if follower.vehicle != idx and not follower.released and follower.start < end:
             heapq.heappush(heap, (end, follower.vehicle, follower.index - 1))
 

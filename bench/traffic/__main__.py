@@ -16,6 +16,11 @@ def main() -> None:
     parser.add_argument("--instances", nargs="*", default=(), help="S2: LoRR instance names")
     parser.add_argument("--no-write", action="store_true", help="print only")
     parser.add_argument("--tag", default="", help="results file suffix (a shorter run)")
+    parser.add_argument(
+        "--quick-search",
+        default="1000,2",
+        help="S1/S3: EXPANSIONS,WEIGHT of the bounded first search, or 'off'",
+    )
     args = parser.parse_args()
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
@@ -24,7 +29,11 @@ def main() -> None:
             figures = scenarios.s2(quick=args.quick, seed=args.seed, instances=args.instances)
         else:
             runner = scenarios.s1 if name == "S1" else scenarios.s3
-            figures = runner(quick=args.quick, seed=args.seed, hours=args.hours)
+            bound = None
+            if args.quick_search != "off":
+                cap, weight = args.quick_search.split(",")
+                bound = (int(cap), float(weight))
+            figures = runner(quick=args.quick, seed=args.seed, hours=args.hours, quick_search=bound)
         figures["quick"] = args.quick
         print(f"== {name}")
         for key, value in figures.items():

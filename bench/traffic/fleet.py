@@ -83,10 +83,16 @@ def fleet_manager(
     policy: ReleasePolicy,
     max_expansions: int,
     weight: float = WEIGHT,
+    quick_search: tuple[int, float] | None = None,
 ) -> TrafficManager:
     """A manager with vehicles `v0..` standing at `starts` (node id, heading)."""
     manager = TrafficManager(
-        layout, [VEHICLE], policy=policy, max_expansions=max_expansions, weight=weight
+        layout,
+        [VEHICLE],
+        policy=policy,
+        max_expansions=max_expansions,
+        weight=weight,
+        quick_search=quick_search,
     )
     for i, (node, heading) in enumerate(starts):
         manager.add_vehicle(f"v{i}", node, 0.0, heading=heading)
@@ -187,6 +193,7 @@ def figures(result: Run, *, sample: int = 1500, seed: int = 0) -> dict[str, Any]
         "tick_cpu_ms_p50": _round(_pct(tick_cpu_ms, 50)),
         "tick_cpu_ms_p95": _round(_pct(tick_cpu_ms, 95)),
         "wall_s": _round(result.wall),
+        "stall_chains": stats.stall_chains,
     }
 
 

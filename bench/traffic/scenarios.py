@@ -23,17 +23,28 @@ from traffic.plans import Goal, ReleasePolicy
 POLICY = ReleasePolicy(max_steps=4, max_distance=4.0, braking_distance=1.0)
 S2_WEIGHT = 1.0  # the 32×32 map is small: plan exactly
 S2_BASE = 4  # base steps ahead
+# S1/S3: a search over this many expansions is repeated near-greedy (the planning-time tail)
+QUICK_SEARCH = (1_000, 2.0)
 
 
 def warehouse_scenario(
-    name: str, grid: GridMap, vehicles: int, hours: float, seed: int, *, max_expansions: int
+    name: str,
+    grid: GridMap,
+    vehicles: int,
+    hours: float,
+    seed: int,
+    *,
+    max_expansions: int,
+    quick_search: tuple[int, float] | None = QUICK_SEARCH,
 ) -> dict[str, Any]:
     """Vehicles start at distinct workstations and run pick -> drop orders for `hours`."""
     began = time.perf_counter()
     layout = Layout.grid(grid.free, parking=grid.stations)
     rng = random.Random(seed)
     starts = [(node_id(c), 0.0) for c in rng.sample(list(grid.stations), vehicles)]
-    manager = fleet_manager(layout, starts, policy=POLICY, max_expansions=max_expansions)
+    manager = fleet_manager(
+        layout, starts, policy=POLICY, max_expansions=max_expansions, quick_search=quick_search
+    )
     setup = time.perf_counter() - began
     config = SimConfig(seed=seed)
     seconds = hours * 3600
@@ -51,26 +62,33 @@ def warehouse_scenario(
         free_cells=len(grid.free),
         workstations=len(grid.stations),
         seed=seed,
+        quick_search=list(quick_search) if quick_search else None,
         delay="5% of moves +5-30 s",
         setup_s=round(setup, 2),
     )
     return out
 
 
-def s1(*, quick: bool, seed: int, hours: float | None = None) -> dict[str, Any]:
+def s1(
+    *, quick: bool, seed: int, hours: float | None = None, quick_search: Any = QUICK_SEARCH
+) -> dict[str, Any]:
     """S1: warehouse-10-20-10-2-1 pattern, 100 vehicles (rho >= 0.85, plan p95 <= 25 ms)."""
     grid = warehouse()
+    hours = hours or (0.15 if quick else 8.0)
     return warehouse_scenario(
-        "S1", grid, 100, hours or (0.15 if quick else 8.0), seed, max_expansions=60_000
+        "S1", grid, 100, hours, seed, max_expansions=60_000, quick_search=quick_search
     )
 
 
-def s3(*, quick: bool, seed: int, hours: float | None = None) -> dict[str, Any]:
+def s3(
+    *, quick: bool, seed: int, hours: float | None = None, quick_search: Any = QUICK_SEARCH
+) -> dict[str, Any]:
     """S3: 1,000 vehicles on a 500×140 warehouse (targets: rho >= 0.7, plan p95 <= 150 ms)."""
     grid = warehouse(block_cols=36, block_rows=45, margin=51, station_cols=8)
     vehicles = 150 if quick else 1000
+    hours = hours or (0.1 if quick else 0.25)
     return warehouse_scenario(
-        "S3", grid, vehicles, hours or (0.1 if quick else 0.25), seed, max_expansions=150_000
+        "S3", grid, vehicles, hours, seed, max_expansions=150_000, quick_search=quick_search
     )
 
 

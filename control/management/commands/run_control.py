@@ -6,6 +6,7 @@ from typing import Any
 from django.conf import settings
 from django.core.management.base import BaseCommand
 
+from control import broadcasts
 from control.health import LeaderHeartbeat, start_health_server
 from control.leader import Leadership, conninfo_from_settings
 from control.service import build_control_loop
@@ -23,6 +24,7 @@ class Command(BaseCommand):
         leadership = None
         if database["ENGINE"] == "django.db.backends.postgresql":
             leadership = Leadership(conninfo_from_settings(database))
+        broadcasts.start()  # browser broadcasts leave without waiting on the main loop
         control = StandbyControl(leadership, build_control_loop)
         health = start_health_server(settings.CONTROL_HEALTH_PORT, control.status)
         heartbeat = LeaderHeartbeat(control.status).start()
