@@ -172,7 +172,7 @@ class OrderDriver:
             return
         if self.traffic is not None and self.traffic.lost(vehicle, execution.vda_order_id):
             return  # traffic plans it again once the vehicle waits at its decision point
-        passed = (state.last_node_sequence_id or 0) // 2  # our sequence ids are 2·route index
+        passed = _passed(state)
         if state.new_base_request:
             passed = max(passed, execution.released_until)  # waiting at the decision point
         window = extension_window(
@@ -267,6 +267,18 @@ class OrderDriver:
     def _end(self, progress: Progress) -> None:
         self.progress.append(progress)
         self._ended.add(progress.order_id)
+
+
+def _passed(state: vda5050.State) -> int:
+    """The route index of the last node the vehicle passed (our sequence ids are 2·index).
+
+    A vehicle that took a new order keeps the previous order's lastNodeSequenceId until it
+    passes the new first node; it still lists that node (sequence id 0), and read as progress
+    the old id would release the new base too far ahead."""
+    last = state.last_node_sequence_id or 0
+    if any(node.sequence_id <= last for node in state.node_states):
+        return 0  # not a sequence id of this order: nothing of it passed yet
+    return last // 2
 
 
 def _released_until(state: vda5050.State) -> int:

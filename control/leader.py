@@ -16,7 +16,11 @@ the monotonic clock (no database round trip per publish):
   publishes, so an old leader whose session ended without it noticing has seen its lease run out.
 
 VDA 5050 vehicles cannot check a fencing token, so these local timings are the fence; the
-invariants `server_timeout > lease` and `guard > lease` are checked in `LeaseTimes`.
+invariants `server_timeout > lease` and `guard > lease` are checked in `LeaseTimes`. The timings
+come from settings (`CONTROL_LEASE`, docs/RELIABILITY_RESULTS.md "Standby"): the defaults let
+the renewal thread be starved for ~5 s (a loaded host) before the server ends the session, and
+still keep a frozen leader's failover near 12 s. A process that stepped down waits `rejoin_after`
+before it competes again, so a healthy standby takes over before a starved process leads anew.
 """
 
 import logging
@@ -24,7 +28,7 @@ import os
 import socket
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -41,15 +45,30 @@ APPLICATION_NAME = "fleet-control-leader"
 class LeaseTimes:
     """The leadership timings in seconds; see the module docstring for why each order holds."""
 
-    renew_every: float = 1.0
-    lease: float = 3.0
-    server_timeout: float = 4.0  # the server ends a silent leader's session after this
-    guard: float = 3.5  # a new leader waits this long after taking the lock
+    # Renewing often keeps the lease (and the server's idle-in-transaction clock) fresh while the
+    # renewal thread gets the CPU only now and then: a starved thread loses less per gap.
+    renew_every: float = 0.5
+    lease: float = 5.0
+    server_timeout: float = 6.0  # the server ends a silent leader's session after this
+    guard: float = 5.5  # a new leader waits this long after taking the lock
     retry_every: float = 0.5  # a standby tries the lock (and a lost database) this often
+    rejoin_after: float = 2.0  # a process that stepped down waits this long before competing
 
     def __post_init__(self) -> None:
         if not self.renew_every < self.lease < min(self.server_timeout, self.guard):
             raise ValueError(f"need renew_every < lease < server_timeout and guard: {self}")
+        if self.retry_every <= 0 or self.rejoin_after < 0:
+            raise ValueError(f"need retry_every > 0 and rejoin_after >= 0: {self}")
+
+    @classmethod
+    def from_settings(cls, values: Mapping[str, float]) -> "LeaseTimes":
+        """From `settings.CONTROL_LEASE` (keys RENEW_EVERY, LEASE, SERVER_TIMEOUT, GUARD,
+        RETRY_EVERY, REJOIN_AFTER; a missing key keeps its default)."""
+        names = {f.upper(): f for f in cls.__dataclass_fields__}
+        unknown = set(values) - names.keys()
+        if unknown:
+            raise ValueError(f"unknown CONTROL_LEASE keys: {sorted(unknown)}")
+        return cls(**{names[key]: float(value) for key, value in values.items()})
 
 
 def conninfo_from_settings(database: dict[str, Any]) -> str:
@@ -95,6 +114,8 @@ class Leadership:
         self._publish_from = 0.0
         self._conn: psycopg.Connection[Any] | None = None
         self._thread: threading.Thread | None = None
+        self._rejoin_at = 0.0  # after a step-down: when this process competes again
+        self.late_renewals = 0  # renewals that came after the lease had run out (starvation)
 
     # --- asked by the other threads ------------------------------------------------------------
 
@@ -125,6 +146,7 @@ class Leadership:
             "holds_lease": self.holds_lease(),
             "database_ok": self.database_ok,
             "identity": self.identity,
+            "late_renewals": self.late_renewals,
         }
 
     # --- lifecycle -----------------------------------------------------------------------------
@@ -147,6 +169,8 @@ class Leadership:
             if self._leading.is_set():
                 self._renew()
                 self._stop.wait(self.times.renew_every)
+            elif self.clock() < self._rejoin_at:
+                self._stop.wait(min(self.times.retry_every, self._rejoin_at - self.clock()))
             else:
                 self._try_acquire()
                 if not self._leading.is_set():
@@ -222,6 +246,12 @@ class Leadership:
             self._step_down(f"renewal failed: {str(error).strip()}", close=True)
             return
         self.database_ok = True
+        if sent >= self._lease_until:  # the thread got no CPU for a while: publishing paused
+            self.late_renewals += 1
+            logger.warning(
+                "leadership: renewal %.1f s after the lease ran out (renewal thread starved?)",
+                sent - self._lease_until,
+            )
         self._lease_until = sent + self.times.lease
 
     def _step_down(self, reason: str, *, close: bool) -> None:
@@ -232,6 +262,7 @@ class Leadership:
             self._close()
         if was_leading:
             logger.warning("leadership: stepped down (fencing %s): %s", self.fencing, reason)
+            self._rejoin_at = self.clock() + self.times.rejoin_after
             self.lost.set()
 
     def _close(self) -> None:

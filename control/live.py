@@ -94,7 +94,11 @@ class LiveVehicle:
 
     def apply_connection(self, message: vda5050.Connection, *, received_at: datetime) -> bool:
         """Take a connection message; True if the vehicle (re)connected."""
-        reconnected = self.session.on_connection(str(message.connection_state), time.monotonic())
+        reconnected = self.session.on_connection(
+            str(message.connection_state),
+            time.monotonic(),
+            identity=(message.header_id, message.timestamp),
+        )
         self.version = message.version or self.version
         self.last_seen = received_at
         self.mark_changed()

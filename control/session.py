@@ -47,6 +47,7 @@ class ProtocolSession:
     clock_skew: float | None = None  # seconds our clock is ahead of the vehicle's
     counters: Counter[str] = field(default_factory=Counter)
     _last_header: dict[str, int] = field(default_factory=dict)
+    _last_online: tuple[int, str] | None = None  # (headerId, timestamp) of the last ONLINE
 
     def check_header(self, kind: str, header_id: int) -> Verdict:
         """Whether a message with `header_id` on topic `kind` is new, a duplicate or stale."""
@@ -64,14 +65,20 @@ class ProtocolSession:
         self._last_header[kind] = header_id
         return Verdict.APPLY
 
-    def on_connection(self, reported: str, now: float) -> bool:
-        """Take a `connection` message; True when the vehicle (re)connected and needs a
-        stateRequest and factsheetRequest to reconcile."""
+    def on_connection(
+        self, reported: str, now: float, identity: tuple[int, str] | None = None
+    ) -> bool:
+        """Take a `connection` message (`identity`: its headerId and timestamp); True when the
+        vehicle (re)connected and needs a stateRequest and factsheetRequest to reconcile."""
         link = _REPORTED.get(reported) or Link(reported)
         reconnected = link is Link.ONLINE and self.link(now) is not Link.ONLINE
         if link is Link.ONLINE:
-            # A new connection may restart header ids at 0: accept whatever comes next.
-            self._last_header.clear()
+            # A new connection may restart header ids at 0: accept whatever comes next. The
+            # same retained ONLINE again (our own re-subscribe after a broker reconnect) is no
+            # new connection: forgetting the header ids then let held-back states through.
+            if identity is None or identity != self._last_online:
+                self._last_header.clear()
+            self._last_online = identity
             self.last_alive_at = now
         self.reported = link
         return reconnected

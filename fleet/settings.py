@@ -196,6 +196,18 @@ FLEET_TRAFFIC_WAIT_RECORDER = "reports.waits.record_traffic_waits"
 # control's /health and /ready (control/health.py; 0 = off). Two controls on one host (a
 # standby pair) need two ports.
 CONTROL_HEALTH_PORT = env.int("CONTROL_HEALTH_PORT", default=8081)
+# Leadership of a standby pair (control/leader.py LeaseTimes, seconds): renew the lease every
+# RENEW_EVERY; publish only within LEASE of the last renewal; the database ends a silent leader's
+# session after SERVER_TIMEOUT; a new leader waits GUARD; a standby polls every RETRY_EVERY; a
+# process that stepped down waits REJOIN_AFTER. Need RENEW_EVERY < LEASE < SERVER_TIMEOUT, GUARD.
+CONTROL_LEASE = {
+    "RENEW_EVERY": env.float("CONTROL_RENEW_SECONDS", default=0.5),
+    "LEASE": env.float("CONTROL_LEASE_SECONDS", default=5.0),
+    "SERVER_TIMEOUT": env.float("CONTROL_SERVER_TIMEOUT_SECONDS", default=6.0),
+    "GUARD": env.float("CONTROL_GUARD_SECONDS", default=5.5),
+    "RETRY_EVERY": env.float("CONTROL_RETRY_SECONDS", default=0.5),
+    "REJOIN_AFTER": env.float("CONTROL_REJOIN_SECONDS", default=2.0),
+}
 # GET /metrics (Prometheus, control/prometheus.py): anonymous scrapes from these networks only,
 # others need `Authorization: Bearer <METRICS_TOKEN>` (unset: no token is accepted).
 METRICS_ALLOWED_CIDRS = env.list("METRICS_ALLOWED_CIDRS", default=["127.0.0.1/32"])

@@ -8,7 +8,7 @@ from django.core.management.base import BaseCommand
 
 from control import broadcasts
 from control.health import LeaderHeartbeat, start_health_server
-from control.leader import Leadership, conninfo_from_settings
+from control.leader import Leadership, LeaseTimes, conninfo_from_settings
 from control.service import build_control_loop
 from control.standby import StandbyControl
 
@@ -23,7 +23,8 @@ class Command(BaseCommand):
         database = settings.DATABASES["default"]
         leadership = None
         if database["ENGINE"] == "django.db.backends.postgresql":
-            leadership = Leadership(conninfo_from_settings(database))
+            times = LeaseTimes.from_settings(settings.CONTROL_LEASE)
+            leadership = Leadership(conninfo_from_settings(database), times)
         broadcasts.start()  # browser broadcasts leave without waiting on the main loop
         control = StandbyControl(leadership, build_control_loop)
         health = start_health_server(settings.CONTROL_HEALTH_PORT, control.status)
