@@ -67,7 +67,7 @@ def test_messages_are_counted_by_topic_and_orders_sent_from_a_state_are_timed() 
     assert sum(metrics.state_to_order.counts) == 0
 
     # The vehicle reaches b: control releases the next node from the paho thread (an update).
-    _deliver(client, topic(), state(header_id=2, order_id="TO-7", last_node="b", nodes=("b",)))
+    _deliver(client, topic(), state(header_id=2, order_id="TO-7", last_node="b"))  # b passed
     _deliver(client, topic(kind="visualization"), b"{not json")
 
     updates = [json.loads(p) for t, p in sent if t.endswith("/order")]
