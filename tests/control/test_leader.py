@@ -173,6 +173,9 @@ def test_a_frozen_leader_never_publishes_after_the_standby_took_over(
         assert standby.role == "standby"
 
         frozen.send_signal(signal.SIGSTOP)
+        # The signal takes effect asynchronously: only what the leader printed after it really
+        # stopped counts (a line stamped just after kill() may be from before the stop).
+        wait_for(lambda: _process_state(frozen.pid) == "T", timeout=10)
         frozen_at = time.time()
         assert standby.wait_until_leading(threading.Event())
         took_over = time.time()
@@ -189,6 +192,12 @@ def test_a_frozen_leader_never_publishes_after_the_standby_took_over(
         frozen.kill()
         frozen.wait()
         log.close()
+
+
+def _process_state(pid: int) -> str:
+    """The one-letter state of a process from /proc (T: stopped)."""
+    stat = Path(f"/proc/{pid}/stat").read_text()
+    return stat.rsplit(")", 1)[1].split()[0]
 
 
 def test_the_publisher_sends_nothing_without_a_lease(monkeypatch: pytest.MonkeyPatch) -> None:
