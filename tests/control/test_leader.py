@@ -146,6 +146,8 @@ while True:  # what the publisher asks before each message
 """
 
 
+# Rerun: SIGSTOP/SIGCONT and server timeouts timed against each other.
+@pytest.mark.flaky(reruns=2, reruns_delay=5)
 def test_a_frozen_leader_never_publishes_after_the_standby_took_over(
     postgres: str, lock_key: int, leaderships: list[Leadership], tmp_path: Path
 ) -> None:

@@ -145,6 +145,9 @@ def fuzz(strategy: Any, examples: int, headers: dict[str, str], checks: list[Any
     call()
 
 
+# Rerun: a database refusing connections under load answers 503; derandomized,
+# so a real 5xx fails every run.
+@pytest.mark.flaky(reruns=2, reruns_delay=5)
 @pytest.mark.parametrize(
     ("mode", "examples"), [(GenerationMode.POSITIVE, 25), (GenerationMode.NEGATIVE, 15)]
 )
