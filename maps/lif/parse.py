@@ -107,6 +107,9 @@ def parse_lif(source: bytes | str | Mapping[str, Any]) -> tuple[LifDocument | No
 def _decode(source: bytes | str | Mapping[str, Any], report: ImportReport) -> Any:
     if isinstance(source, Mapping):
         return source
+    if not isinstance(source, bytes | str):  # a JSON body that is a list, number or boolean
+        report.error("$", f"a LIF document is a JSON object, not {type(source).__name__}")
+        return None
     try:
         text = source.decode("utf-8-sig") if isinstance(source, bytes) else source
         return json.loads(text)

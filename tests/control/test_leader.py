@@ -164,7 +164,7 @@ def test_a_frozen_leader_never_publishes_after_the_standby_took_over(
 
     def lines() -> list[list]:  # type: ignore[type-arg]
         text = (tmp_path / "leader.log").read_text()
-        return [json.loads(line) for line in text.splitlines() if line.startswith("[")]
+        return [entry for line in text.splitlines() if (entry := _entry(line)) is not None]
 
     try:
         wait_for(lambda: any(ok for _, ok, _ in lines()), timeout=20)
@@ -194,6 +194,15 @@ def test_a_frozen_leader_never_publishes_after_the_standby_took_over(
         frozen.kill()
         frozen.wait()
         log.close()
+
+
+def _entry(line: str) -> list | None:  # type: ignore[type-arg]
+    """One printed line of the leader, or None for a line caught half-written."""
+    try:
+        entry = json.loads(line)
+    except ValueError:
+        return None
+    return entry if isinstance(entry, list) and len(entry) == 3 else None
 
 
 def _process_state(pid: int) -> str:

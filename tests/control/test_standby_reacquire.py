@@ -71,7 +71,8 @@ def test_orders_run_after_the_same_process_leads_again(
 
     assert end_lock_session() == 1
     wait_until(lambda: terms_led(control)[-1:] == [2], 60, "the same process leads again")
-    assert "stepped down (fencing 1)" in control.output()
+    # The fencing sequence lives in the database and earlier tests may have advanced it.
+    assert re.search(r"stepped down \(fencing \d+\)", control.output())
 
     second = create_transport_order(source=drop, destination=pick, load_id="B")
     wait_until(lambda: status(second) == "FINISHED", 90, "second order finished", stop_all)

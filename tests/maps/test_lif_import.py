@@ -5,6 +5,7 @@ import json
 
 import pytest
 
+from maps.lif.parse import parse_lif
 from maps.models import Edge, EdgeProperty, LifImport, Map, Node, Site, Station, VehicleType
 from maps.selectors import export_map_lif, export_site_lif, load_site_graph
 from maps.services import import_lif
@@ -239,3 +240,12 @@ def test_demo_layout_exports_with_kinds_and_re_imports(demo_map) -> None:
     ]
     assert not VehicleType.objects.exists()
     assert "open to every vehicle" in str(report.warnings[0])
+
+
+@pytest.mark.parametrize("body", [True, 12, [{"layouts": []}]])
+def test_a_json_body_that_is_not_an_object_is_reported_not_a_server_error(body) -> None:
+    """Found by the API fuzzer: `true` as the request body reached json.loads and raised."""
+    document, report = parse_lif(body)
+    assert document is None
+    assert report.errors
+    assert "JSON object" in str(report.as_dict())
