@@ -17,6 +17,7 @@ import threading
 from collections.abc import Sequence
 from pathlib import Path
 from types import FrameType
+from typing import Any
 from urllib.parse import unquote, urlsplit
 
 from simulator.delays import DelayConfig, parse_range
@@ -28,6 +29,30 @@ from vda5050 import VDA5050Error
 log = logging.getLogger("simulator")
 
 _DEFAULT_PORT = 1883
+
+
+def config_from_args(
+    args: argparse.Namespace, broker: tuple[str, int, str | None, str | None], **extra: Any
+) -> FleetConfig:
+    """The fleet configuration the command-line options describe (shared with simulator.pump)."""
+    host, port, user, password = broker
+    return FleetConfig(
+        count=args.count,
+        broker_host=host,
+        broker_port=port,
+        username=user,
+        password=password,
+        interface=args.interface,
+        manufacturer=args.manufacturer,
+        version=args.version,
+        speed=args.speed,
+        time_scale=args.time_scale,
+        visualization_hz=args.visualization_hz,
+        state_interval=args.state_interval,
+        serial_prefix=args.serial_prefix,
+        tick_hz=args.tick_hz,
+        **extra,
+    )
 
 
 def parse_broker(url: str) -> tuple[str, int, str | None, str | None]:
@@ -132,23 +157,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         delays = DelayConfig(share=args.delay_share, low=low, high=high, seed=args.delay_seed)
     except (ValueError, LayoutError) as exc:
         parser.error(str(exc))
-    config = FleetConfig(
-        count=args.count,
-        broker_host=host,
-        broker_port=port,
-        username=user,
-        password=password,
-        interface=args.interface,
-        manufacturer=args.manufacturer,
-        version=args.version,
-        speed=args.speed,
-        time_scale=args.time_scale,
-        visualization_hz=args.visualization_hz,
-        state_interval=args.state_interval,
-        serial_prefix=args.serial_prefix,
-        tick_hz=args.tick_hz,
-        misbehaviours=misbehaviours,
-        delays=delays,
+    config = config_from_args(
+        args, (host, port, user, password), misbehaviours=misbehaviours, delays=delays
     )
     try:
         fleet = SimulatedFleet(layout, config)

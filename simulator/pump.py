@@ -26,7 +26,7 @@ from types import FrameType
 import paho.mqtt.client as mqtt
 
 from simulator import wire
-from simulator.__main__ import build_parser, parse_broker
+from simulator.__main__ import build_parser, config_from_args, parse_broker
 from simulator.fleet import FleetConfig, build_vehicles
 from simulator.layout import LayoutError, load_layout
 from simulator.mqtt import BrokerSettings, VehicleLink
@@ -185,23 +185,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     logging.getLogger("simulator.mqtt").setLevel(logging.WARNING)  # a line per order otherwise
     try:
-        host, port, user, password = parse_broker(args.broker)
-        config = FleetConfig(
-            count=args.count,
-            broker_host=host,
-            broker_port=port,
-            username=user,
-            password=password,
-            interface=args.interface,
-            manufacturer=args.manufacturer,
-            version=args.version,
-            speed=args.speed,
-            time_scale=args.time_scale,
-            visualization_hz=args.visualization_hz,
-            state_interval=args.state_interval,
-            serial_prefix=args.serial_prefix,
-            tick_hz=args.tick_hz,
-        )
+        config = config_from_args(args, parse_broker(args.broker))
         fleet = build_pump(config, args.layout, slices=args.slices)
     except (ValueError, LayoutError) as exc:
         parser.error(str(exc))
@@ -212,7 +196,13 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     signal.signal(signal.SIGTERM, request_stop)
     signal.signal(signal.SIGINT, request_stop)
-    log.info("pump: %d vehicles on %s:%d interface %r", config.count, host, port, args.interface)
+    log.info(
+        "pump: %d vehicles on %s:%d interface %r",
+        config.count,
+        config.broker_host,
+        config.broker_port,
+        args.interface,
+    )
     fleet.run(stop)
     log.info("pump stopped (%d reconnects)", fleet.reconnects)
     return 0
