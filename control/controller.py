@@ -38,6 +38,8 @@ from vda5050.topics import Topic, TopicError
 logger = logging.getLogger(__name__)
 
 TOPIC_CACHE_SIZE = 20_000  # parsed topics kept: 4 inbound kinds for 5,000 vehicles
+SLOW_SYNC_STEP = 0.002  # s: an order whose sync took longer (it was planned) ...
+HAND_OVER = 0.0005  # s: ... is followed by this sleep, so waiting messages take the lock
 
 
 _VEHICLE_COMMANDS: dict[str, tuple[str, dict[str, Any]]] = {
@@ -61,6 +63,7 @@ class Controller:
         publish: Publish | None = None,
         base_ahead: int | None = None,
         traffic: bool = False,
+        park_idle: bool = True,
     ) -> None:
         self.store = store
         self.interface_name = interface_name
@@ -75,7 +78,10 @@ class Controller:
         self._unflushed_outcomes: list[InstantActionTrack] = []  # from a failed flush
         self._job_requests: list[dict[str, Any]] = []  # the flush opens charge sessions, moves
         # Traffic management releases bases; off: a fixed `base_ahead` (single-vehicle sites).
-        self.traffic = TrafficLink(lambda: list(self.fleet.vehicles.values())) if traffic else None
+        # `park_idle`: idle vehicles in the way of an order are sent to park (control/parking.py).
+        park = (lambda job: self._job_requests.append(job)) if park_idle else None
+        fleet = lambda: list(self.fleet.vehicles.values())  # noqa: E731
+        self.traffic = TrafficLink(fleet, park=park) if traffic else None
         self.waits = WaitLog()  # traffic waits as episodes, for the reports (control.wait_log)
         self.driver = OrderDriver(
             self.publisher, lambda: self.layouts, base_ahead=base_ahead, traffic=self.traffic
@@ -224,9 +230,22 @@ class Controller:
                 vehicle.dialect = dialects.get(vehicle.pk or -1, "STANDARD")
 
     def sync(self, orders: list[ActiveOrder]) -> None:
-        """Start, adopt, extend, resend or cancel the assigned orders read from the database."""
+        """Start, adopt, extend, resend or cancel the assigned orders read from the database.
+
+        The lock is taken per order, not for the whole list: starting an order plans its route
+        (milliseconds, more in congestion), and state messages must not wait for a dozen of
+        them. After a slow one the loop sleeps a moment so that the waiting paho thread really
+        gets the lock (a released lock is usually taken again at once by the thread that let
+        it go)."""
         with self.lock:
-            self.driver.sync(self.fleet.by_pk, self.distribution.ready_orders(orders))
+            ready = self.distribution.ready_orders(orders)
+            self.driver.begin_sync(ready)
+        for order in ready:
+            started = time.perf_counter()
+            with self.lock:
+                self.driver.sync_order(self.fleet.by_pk, order)
+            if time.perf_counter() - started > SLOW_SYNC_STEP:
+                time.sleep(HAND_OVER)
 
     def execute(self, command: dict[str, Any]) -> None:
         """Carry out a command from web or Celery (fleet.control_queue).

@@ -58,15 +58,24 @@ class OrderDriver:
         self, vehicles: Callable[[int], LiveVehicle | None], orders: list[ActiveOrder]
     ) -> None:
         """Start, adopt, extend, resend or cancel the assigned orders read from the database."""
+        self.begin_sync(orders)
+        for order in orders:
+            self.sync_order(vehicles, order)
+
+    def begin_sync(self, orders: list[ActiveOrder]) -> None:
+        """The first part of `sync`: take the database's list and let traffic re-time."""
         if self.traffic is not None:
             self.traffic.ensure(self.layouts())
             self.traffic.tick(time.monotonic())  # re-timed and re-planned bases go out below
         self._orders = {o.transport_order_id: o for o in orders}
         self._ended &= self._orders.keys()  # forget what the database closed
-        for order in orders:
-            vehicle = vehicles(order.vehicle_pk)
-            if vehicle is not None and order.transport_order_id not in self._ended:
-                self._sync_one(vehicle, order)
+
+    def sync_order(self, vehicles: Callable[[int], LiveVehicle | None], order: ActiveOrder) -> None:
+        """The rest of `sync`, one order at a time (the controller may let go of its lock
+        between two orders: starting one plans its route, which takes milliseconds)."""
+        vehicle = vehicles(order.vehicle_pk)
+        if vehicle is not None and order.transport_order_id not in self._ended:
+            self._sync_one(vehicle, order)
 
     def on_state(self, vehicle: LiveVehicle, state: vda5050.State) -> None:
         """Follow the vehicle's progress on its order and release more of the route."""

@@ -1,4 +1,4 @@
-"""The PostgreSQL path of `save_snapshots` (UPDATE … FROM VALUES) stores exactly what Django's
+"""The PostgreSQL path of `save_snapshots` (UPDATE … FROM jsonb_to_recordset) stores exactly what Django's
 bulk_update stores, for every snapshot field, NULLs and JSON included."""
 
 from datetime import UTC, datetime
@@ -30,7 +30,7 @@ FULL = {
     "loads": [{"loadId": "L1", "weight": 12.5}],
     "order_id": "TO-7",
     "order_update_id": 3,
-    "last_node_id": "n'9",
+    "last_node_id": "n'9 ü→\\",
     "last_node_sequence_id": 18,
     "last_seen": datetime(2026, 11, 22, 8, 0, 1, 250000, tzinfo=UTC),
     "clock_skew": -0.125,
