@@ -117,10 +117,13 @@ class DispatchFleet:
     unavailable: Counter[str] = field(default_factory=Counter)
 
 
-def get_dispatch_fleet(*, held_since: datetime | None = None) -> DispatchFleet:
+def get_dispatch_fleet(
+    *, held_since: datetime | None = None, with_factsheets: bool = True
+) -> DispatchFleet:
     """Online vehicles split into idle (available, no active order), busy and unavailable (with
     the reason: paused, in error, manual mode, no position, or told to pause, charge or park by
-    a command since `held_since`)."""
+    a command since `held_since`). Without factsheets the vehicles come with `factsheet`
+    deferred (dispatch attaches the idle ones' from its cache)."""
     busy = set(
         TransportOrder.objects.filter(
             status__in=TransportOrder.ACTIVE_STATUSES, vehicle__isnull=False
@@ -128,7 +131,8 @@ def get_dispatch_fleet(*, held_since: datetime | None = None) -> DispatchFleet:
     )
     held = list_held_vehicles(since=held_since) if held_since else {}
     fleet = DispatchFleet()
-    for vehicle in Vehicle.objects.filter(connection=Vehicle.Connection.ONLINE):
+    online = Vehicle.objects.filter(connection=Vehicle.Connection.ONLINE)
+    for vehicle in online if with_factsheets else online.defer("factsheet"):
         fleet.online += 1
         if not vehicle.is_available:
             fleet.unavailable[_unavailable_reason(vehicle)] += 1
@@ -186,7 +190,9 @@ def list_active_orders() -> QuerySet[TransportOrder]:
     """Orders that a vehicle is assigned to or driving: what `control` executes."""
     return (
         TransportOrder.objects.filter(status__in=TransportOrder.ACTIVE_STATUSES)
-        .select_related("vehicle", "source__node", "destination__node", "source__map")
+        # Not the vehicle row: control reads this every second and needs only vehicle_id
+        # (the row's factsheet and state JSON cost more to decode than the rest together).
+        .select_related("source__node", "destination__node", "source__map")
         .prefetch_related(
             Prefetch("steps", queryset=OrderStep.objects.select_related("station__node"))
         )

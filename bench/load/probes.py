@@ -6,9 +6,10 @@
 
 All three wait until wall time `--start` (epoch seconds), measure for `--seconds`, then write.
 `raw` is the floor for `control`: a bare paho client on the same topics (same QoS) that only
-counts, and, on the order topic, the time from a vehicle's last state to an order update
-for it (the state → order-update latency, broker hops included). `api` posts transport
-orders at a steady rate and times POST → the order's first message on the order topic.
+counts, and, on the order topic, the time from a vehicle's state that reported progress to
+the order update answering it (the state → order-update latency, broker hops included).
+`api` posts transport orders at a steady rate and times POST → the order's first message on
+the order topic.
 `ws` is a browser on the live page: websocket messages and vehicle rows per second.
 """
 
@@ -51,15 +52,36 @@ def _wait_until(start: float) -> None:
     time.sleep(max(0.0, start - time.time()))
 
 
+class _Progress(msgspec.Struct):
+    """The two fields of a state that ask the master control for more base."""
+
+    lastNodeSequenceId: int = 0  # noqa: N815 (VDA 5050 field names)
+    newBaseRequest: bool = False  # noqa: N815
+
+
+_decode_progress = msgspec.json.Decoder(_Progress).decode
+
+
 def raw(args: argparse.Namespace) -> dict[str, Any]:
-    """Count what paho alone receives on control's topics; time state → order update."""
+    """Count what paho alone receives on control's topics; time state → order update.
+
+    The latency is causal: an order update answers a vehicle's state when that state reported
+    progress (a higher lastNodeSequenceId, or newBaseRequest) and the update arrives before the
+    vehicle's next state; it is timed from that state's arrival here, so both broker hops and
+    any backlog in control count. Other updates (released by another vehicle's progress, or
+    by control's periodic sync) are counted apart."""
     host, port = args.broker.split(":")
     client = _client("raw", host, int(port))
     iface = args.interface
     window = {"on": False}
     counts: dict[str, int] = dict.fromkeys((k for k, _ in CONTROL_TOPICS), 0)
-    last_state: dict[str, float] = {}
+    # Per vehicle: arrival of its latest state if that state asked for progress and is still
+    # unanswered, else None; and its last node sequence id.
+    asking: dict[str, float | None] = {}
+    last_node: dict[str, int] = {}
     latencies: list[float] = []
+    other_updates = [0]
+    unanswered = [0]
     new_orders = [0]
 
     def on_message(_c: mqtt.Client, _u: Any, message: mqtt.MQTTMessage) -> None:
@@ -67,15 +89,28 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
         topic = message.topic
         kind = topic[topic.rfind("/") + 1 :]
         if kind == "state":
-            last_state[topic[:-6]] = now
+            vehicle = topic[:-6]
+            try:
+                progress = _decode_progress(message.payload)
+            except msgspec.DecodeError:
+                return
+            moved = progress.lastNodeSequenceId > last_node.get(vehicle, 0)
+            last_node[vehicle] = progress.lastNodeSequenceId
+            if window["on"] and asking.get(vehicle) is not None:
+                unanswered[0] += 1  # its previous request got no update before this state
+            asking[vehicle] = now if (moved or progress.newBaseRequest) else None
         elif kind == "order":
             if window["on"]:
+                vehicle = topic[:-6]
                 update = msgspec.json.decode(message.payload).get("orderUpdateId", 0)
-                sent = last_state.get(topic[:-6])
+                asked = asking.get(vehicle)
                 if update == 0:
                     new_orders[0] += 1
-                elif sent is not None:
-                    latencies.append(now - sent)
+                elif asked is not None:
+                    latencies.append(now - asked)
+                    asking[vehicle] = None
+                else:
+                    other_updates[0] += 1
             return
         if window["on"]:
             counts[kind] += 1
@@ -99,6 +134,8 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
         "by_topic_per_s": {k: round(v / wall, 1) for k, v in counts.items()},
         "cpu_share": round((cpu1 - cpu0) / wall, 4),
         "order_updates": len(latencies),
+        "order_updates_other": other_updates[0],
+        "progress_states_unanswered": unanswered[0],
         "new_orders": new_orders[0],
         "state_to_update_p50_ms": ms(percentile(latencies, 0.5)),
         "state_to_update_p99_ms": ms(percentile(latencies, 0.99)),
