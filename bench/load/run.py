@@ -16,28 +16,31 @@ probes' figures, and the load average. Figures go to stdout and bench/results/lo
 """
 
 import argparse
-import contextlib
 import json
 import os
-import platform
-import resource
 import shutil
-import signal
-import socket
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
-import psutil
 import psycopg
 import redis
 
 from bench import results
+from bench.load.processes import (
+    ROOT,
+    Child,
+    create_database,
+    db_stats,
+    free_ports,
+    python,
+    wait_for,
+)
+from bench.load.report import report
 
-ROOT = Path(__file__).resolve().parents[2]
 SNAPSHOT_KEY = "fleet:control:metrics"  # control.metrics.SNAPSHOT_KEY (bench stays Django-free)
 MOSQUITTO_CONF = """\
 listener {port} 127.0.0.1
@@ -52,120 +55,6 @@ log_dest stderr
 log_type error
 log_type warning
 """
-
-
-def free_ports(count: int) -> list[int]:
-    """`count` distinct free ports (all bound at once, so none is handed out twice)."""
-    sockets = [socket.socket() for _ in range(count)]
-    try:
-        for sock in sockets:
-            sock.bind(("127.0.0.1", 0))
-        return [int(sock.getsockname()[1]) for sock in sockets]
-    finally:
-        for sock in sockets:
-            sock.close()
-
-
-class Child:
-    """A started process, its log file and its psutil handle (children included for CPU)."""
-
-    def __init__(self, name: str, argv: list[str], env: dict[str, str], logs: Path) -> None:
-        self.name = name
-        self.log: IO[bytes] = (logs / f"{name}.log").open("wb")
-        self.popen = subprocess.Popen(
-            argv,
-            cwd=ROOT,
-            env=env,
-            stdout=self.log,
-            stderr=subprocess.STDOUT,
-            start_new_session=True,
-            preexec_fn=_raise_file_limit,
-        )
-        self.process = psutil.Process(self.popen.pid)
-
-    def tree(self) -> list[psutil.Process]:
-        try:
-            return [self.process, *self.process.children(recursive=True)]
-        except psutil.NoSuchProcess:
-            return []
-
-    def cpu_seconds(self) -> float:
-        total = 0.0
-        for process in self.tree():
-            try:
-                times = process.cpu_times()
-                total += times.user + times.system
-            except psutil.NoSuchProcess:
-                pass
-        return total
-
-    def rss_mb(self) -> float:
-        total = 0
-        for process in self.tree():
-            with contextlib.suppress(psutil.NoSuchProcess):
-                total += process.memory_info().rss
-        return round(total / 2**20, 1)
-
-    def stop(self, timeout: float = 20.0) -> int | None:
-        if self.popen.poll() is None:
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(self.popen.pid, signal.SIGTERM)
-        try:
-            code = self.popen.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            os.killpg(self.popen.pid, signal.SIGKILL)
-            code = self.popen.wait()
-        self.log.close()
-        return code
-
-
-def _raise_file_limit() -> None:
-    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
-    wanted = 8192 if hard == resource.RLIM_INFINITY else min(8192, hard)
-    if soft < wanted:
-        resource.setrlimit(resource.RLIMIT_NOFILE, (wanted, hard))
-
-
-def python(*args: str) -> list[str]:
-    return [sys.executable, *args]
-
-
-def create_database(admin_url: str, name: str) -> None:
-    with psycopg.connect(admin_url, autocommit=True) as connection:
-        connection.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
-        connection.execute(f'CREATE DATABASE "{name}"')
-
-
-def db_stats(url: str, name: str) -> dict[str, int]:
-    with psycopg.connect(url, autocommit=True) as connection:
-        row = connection.execute(
-            "SELECT tup_inserted, tup_updated, tup_deleted, xact_commit "
-            "FROM pg_stat_database WHERE datname = %s",
-            (name,),
-        ).fetchone()
-        assert row is not None
-        online = connection.execute(
-            "SELECT count(*) FROM robots_vehicle WHERE connection = 'ONLINE'"
-        ).fetchone()
-    return {
-        "inserted": row[0],
-        "updated": row[1],
-        "deleted": row[2],
-        "commits": row[3],
-        "online": online[0] if online else 0,
-    }
-
-
-def wait_for(condition: Any, timeout: float, what: str, children: list[Child]) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if condition():
-            return
-        for child in children:
-            if child.popen.poll() is not None:
-                raise SystemExit(f"{child.name} exited early; see its log")
-        time.sleep(1.0)
-    raise SystemExit(f"timed out after {timeout:.0f} s waiting for {what}")
 
 
 def split_layout(layout_file: Path, pumps: int, vehicles: int) -> list[tuple[Path, int, str]]:
@@ -379,117 +268,6 @@ def sample(children: list[Child], rds: redis.Redis, db_url: str, database: str) 
         "db": db_stats(db_url, database),
         "control": json.loads(raw) if raw else {},
         "load": os.getloadavg(),
-    }
-
-
-def _delta_histogram_p(
-    before: dict[str, Any], after: dict[str, Any], q: float
-) -> float | str | None:
-    """Upper bucket bound (ms) under which fraction `q` of the window's observations fall
-    (a string "> N" when they fall beyond the last bound)."""
-    if not before or not after:
-        return None
-    counts = [a - b for a, b in zip(after["counts"], before["counts"], strict=True)]
-    total = sum(counts)
-    if not total:
-        return None
-    running = 0
-    for bound, count in zip([*after["bounds"], float("inf")], counts, strict=True):
-        running += count
-        if running >= q * total:
-            if bound == float("inf"):
-                return f"> {after['bounds'][-1] * 1e3:g}"
-            return round(float(bound) * 1e3, 2)
-    return None
-
-
-def report(
-    args: argparse.Namespace,
-    before: dict[str, Any],
-    after: dict[str, Any],
-    probes: dict[str, Any],
-    memory: dict[str, float],
-    registered_s: float,
-    info: dict[str, Any],
-) -> dict[str, Any]:
-    wall = after["wall"] - before["wall"]
-    cpu = {n: round((after["cpu"][n] - before["cpu"][n]) / wall, 4) for n in after["cpu"]}
-    db = {
-        k: after["db"][k] - before["db"][k] for k in ("inserted", "updated", "deleted", "commits")
-    }
-    c0, c1 = before["control"], after["control"]
-    control: dict[str, Any] = {}
-    if c0 and c1:
-        span = c1["time"] - c0["time"]
-        topics = {
-            k: round((v - c0["messages_by_topic"].get(k, 0)) / span, 1)
-            for k, v in c1["messages_by_topic"].items()
-        }
-        handled = c1["counters"].get("messages", 0) - c0["counters"].get("messages", 0)
-        control = {
-            "messages_per_s": round(handled / span, 1),
-            "by_topic_per_s": topics,
-            "decode_errors": c1["counters"].get("decode_errors", 0),
-            "handler_errors": c1["counters"].get("handler_errors", 0),
-            "handling_p50_ms": _delta_histogram_p(
-                c0["handling_seconds"], c1["handling_seconds"], 0.5
-            ),
-            "handling_p99_ms": _delta_histogram_p(
-                c0["handling_seconds"], c1["handling_seconds"], 0.99
-            ),
-            "state_to_order_p50_ms_bucket": _delta_histogram_p(
-                c0["state_to_order_seconds"], c1["state_to_order_seconds"], 0.5
-            ),
-            "state_to_order_p99_ms_bucket": _delta_histogram_p(
-                c0["state_to_order_seconds"], c1["state_to_order_seconds"], 0.99
-            ),
-            "vehicles_executing": c1.get("vehicles_executing"),
-        }
-    raw = probes["raw"]
-    raw_rate = raw.get("messages_per_s") or 0
-    state_rate = raw.get("by_topic_per_s", {}).get("state", 0)
-    ratio = round(control["messages_per_s"] / raw_rate, 3) if control and raw_rate else None
-    cpu_ratio = round(cpu["control"] / raw["cpu_share"], 2) if raw.get("cpu_share") else None
-    latency_p99 = raw.get("state_to_update_p99_ms")
-    api_p95 = probes["api"].get("post_to_published_p95_ms")
-    return {
-        "config": {
-            "vehicles": args.vehicles,
-            "pumps": args.pumps,
-            "seconds": args.seconds,
-            "warmup": args.warmup,
-            "state_interval": args.state_interval,
-            "visualization_hz": args.visualization_hz,
-            "order_rate": args.order_rate,
-            "traffic": args.traffic,
-            "max_queued_messages": args.max_queued,
-            "time_scale": args.time_scale,
-            "layout_nodes": info["nodes"],
-            "layout_stations": info["stations"],
-            "cores": os.cpu_count(),
-            "python": platform.python_version(),
-        },
-        "registered_s": round(registered_s, 1),
-        "load_average": {"start": before["load"], "end": after["load"]},
-        "cpu_share": cpu,
-        "control_cpu_vs_raw_subscriber": cpu_ratio,
-        "memory_rss_mb": memory,
-        "raw_subscriber": raw,
-        "control": control,
-        "receive_ratio_control_to_raw": ratio,
-        "api": probes["api"],
-        "browser": probes["ws"],
-        "db_rows_per_s": {k: round(v / wall, 1) for k, v in db.items()},
-        "offered_per_s": {  # what the vehicles would send if the pumps got the CPU they need
-            "state": round(args.vehicles / args.state_interval, 1),
-            "visualization": round(args.vehicles * args.visualization_hz, 1),
-        },
-        "targets": {
-            "state_messages_per_s": state_rate,
-            "control_cpu_le_25pct": cpu["control"] <= 0.25,
-            "state_to_update_p99_le_50ms": latency_p99 is not None and latency_p99 <= 50,
-            "api_to_published_p95_le_500ms": api_p95 is not None and api_p95 <= 500,
-        },
     }
 
 

@@ -1,0 +1,131 @@
+"""The processes of the load benchmark: start, watch, measure and stop them (Django-free)."""
+
+import contextlib
+import os
+import resource
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import IO, Any
+
+import psutil
+import psycopg
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def free_ports(count: int) -> list[int]:
+    """`count` distinct free ports (all bound at once, so none is handed out twice)."""
+    sockets = [socket.socket() for _ in range(count)]
+    try:
+        for sock in sockets:
+            sock.bind(("127.0.0.1", 0))
+        return [int(sock.getsockname()[1]) for sock in sockets]
+    finally:
+        for sock in sockets:
+            sock.close()
+
+
+class Child:
+    """A started process, its log file and its psutil handle (children included for CPU)."""
+
+    def __init__(self, name: str, argv: list[str], env: dict[str, str], logs: Path) -> None:
+        self.name = name
+        self.log: IO[bytes] = (logs / f"{name}.log").open("wb")
+        self.popen = subprocess.Popen(
+            argv,
+            cwd=ROOT,
+            env=env,
+            stdout=self.log,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+            preexec_fn=_raise_file_limit,
+        )
+        self.process = psutil.Process(self.popen.pid)
+
+    def tree(self) -> list[psutil.Process]:
+        try:
+            return [self.process, *self.process.children(recursive=True)]
+        except psutil.NoSuchProcess:
+            return []
+
+    def cpu_seconds(self) -> float:
+        total = 0.0
+        for process in self.tree():
+            try:
+                times = process.cpu_times()
+                total += times.user + times.system
+            except psutil.NoSuchProcess:
+                pass
+        return total
+
+    def rss_mb(self) -> float:
+        total = 0
+        for process in self.tree():
+            with contextlib.suppress(psutil.NoSuchProcess):
+                total += process.memory_info().rss
+        return round(total / 2**20, 1)
+
+    def stop(self, timeout: float = 20.0) -> int | None:
+        if self.popen.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.popen.pid, signal.SIGTERM)
+        try:
+            code = self.popen.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(self.popen.pid, signal.SIGKILL)
+            code = self.popen.wait()
+        self.log.close()
+        return code
+
+
+def _raise_file_limit() -> None:
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    wanted = 8192 if hard == resource.RLIM_INFINITY else min(8192, hard)
+    if soft < wanted:
+        resource.setrlimit(resource.RLIMIT_NOFILE, (wanted, hard))
+
+
+def python(*args: str) -> list[str]:
+    return [sys.executable, *args]
+
+
+def create_database(admin_url: str, name: str) -> None:
+    with psycopg.connect(admin_url, autocommit=True) as connection:
+        connection.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+        connection.execute(f'CREATE DATABASE "{name}"')
+
+
+def db_stats(url: str, name: str) -> dict[str, int]:
+    with psycopg.connect(url, autocommit=True) as connection:
+        row = connection.execute(
+            "SELECT tup_inserted, tup_updated, tup_deleted, xact_commit "
+            "FROM pg_stat_database WHERE datname = %s",
+            (name,),
+        ).fetchone()
+        assert row is not None
+        online = connection.execute(
+            "SELECT count(*) FROM robots_vehicle WHERE connection = 'ONLINE'"
+        ).fetchone()
+    return {
+        "inserted": row[0],
+        "updated": row[1],
+        "deleted": row[2],
+        "commits": row[3],
+        "online": online[0] if online else 0,
+    }
+
+
+def wait_for(condition: Any, timeout: float, what: str, children: list[Child]) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if condition():
+            return
+        for child in children:
+            if child.popen.poll() is not None:
+                raise SystemExit(f"{child.name} exited early; see its log")
+        time.sleep(1.0)
+    raise SystemExit(f"timed out after {timeout:.0f} s waiting for {what}")

@@ -1,0 +1,117 @@
+"""The figures of one load-benchmark run, from two samples taken around the window."""
+
+import argparse
+import os
+import platform
+from typing import Any
+
+
+def _delta_histogram_p(
+    before: dict[str, Any], after: dict[str, Any], q: float
+) -> float | str | None:
+    """Upper bucket bound (ms) under which fraction `q` of the window's observations fall
+    (a string "> N" when they fall beyond the last bound)."""
+    if not before or not after:
+        return None
+    counts = [a - b for a, b in zip(after["counts"], before["counts"], strict=True)]
+    total = sum(counts)
+    if not total:
+        return None
+    running = 0
+    for bound, count in zip([*after["bounds"], float("inf")], counts, strict=True):
+        running += count
+        if running >= q * total:
+            if bound == float("inf"):
+                return f"> {after['bounds'][-1] * 1e3:g}"
+            return round(float(bound) * 1e3, 2)
+    return None
+
+
+def report(
+    args: argparse.Namespace,
+    before: dict[str, Any],
+    after: dict[str, Any],
+    probes: dict[str, Any],
+    memory: dict[str, float],
+    registered_s: float,
+    info: dict[str, Any],
+) -> dict[str, Any]:
+    wall = after["wall"] - before["wall"]
+    cpu = {n: round((after["cpu"][n] - before["cpu"][n]) / wall, 4) for n in after["cpu"]}
+    db = {
+        k: after["db"][k] - before["db"][k] for k in ("inserted", "updated", "deleted", "commits")
+    }
+    c0, c1 = before["control"], after["control"]
+    control: dict[str, Any] = {}
+    if c0 and c1:
+        span = c1["time"] - c0["time"]
+        topics = {
+            k: round((v - c0["messages_by_topic"].get(k, 0)) / span, 1)
+            for k, v in c1["messages_by_topic"].items()
+        }
+        handled = c1["counters"].get("messages", 0) - c0["counters"].get("messages", 0)
+        control = {
+            "messages_per_s": round(handled / span, 1),
+            "by_topic_per_s": topics,
+            "decode_errors": c1["counters"].get("decode_errors", 0),
+            "handler_errors": c1["counters"].get("handler_errors", 0),
+            "handling_p50_ms": _delta_histogram_p(
+                c0["handling_seconds"], c1["handling_seconds"], 0.5
+            ),
+            "handling_p99_ms": _delta_histogram_p(
+                c0["handling_seconds"], c1["handling_seconds"], 0.99
+            ),
+            "state_to_order_p50_ms_bucket": _delta_histogram_p(
+                c0["state_to_order_seconds"], c1["state_to_order_seconds"], 0.5
+            ),
+            "state_to_order_p99_ms_bucket": _delta_histogram_p(
+                c0["state_to_order_seconds"], c1["state_to_order_seconds"], 0.99
+            ),
+            "vehicles_executing": c1.get("vehicles_executing"),
+        }
+    raw = probes["raw"]
+    raw_rate = raw.get("messages_per_s") or 0
+    state_rate = raw.get("by_topic_per_s", {}).get("state", 0)
+    ratio = round(control["messages_per_s"] / raw_rate, 3) if control and raw_rate else None
+    cpu_ratio = round(cpu["control"] / raw["cpu_share"], 2) if raw.get("cpu_share") else None
+    latency_p99 = raw.get("state_to_update_p99_ms")
+    api_p95 = probes["api"].get("post_to_published_p95_ms")
+    return {
+        "config": {
+            "vehicles": args.vehicles,
+            "pumps": args.pumps,
+            "seconds": args.seconds,
+            "warmup": args.warmup,
+            "state_interval": args.state_interval,
+            "visualization_hz": args.visualization_hz,
+            "order_rate": args.order_rate,
+            "traffic": args.traffic,
+            "max_queued_messages": args.max_queued,
+            "time_scale": args.time_scale,
+            "layout_nodes": info["nodes"],
+            "layout_stations": info["stations"],
+            "cores": os.cpu_count(),
+            "python": platform.python_version(),
+        },
+        "registered_s": round(registered_s, 1),
+        "load_average": {"start": before["load"], "end": after["load"]},
+        "cpu_share": cpu,
+        "control_cpu_vs_raw_subscriber": cpu_ratio,
+        "memory_rss_mb": memory,
+        "raw_subscriber": raw,
+        "control": control,
+        "receive_ratio_control_to_raw": ratio,
+        "api": probes["api"],
+        "browser": probes["ws"],
+        "db_rows_per_s": {k: round(v / wall, 1) for k, v in db.items()},
+        "offered_per_s": {  # what the vehicles would send if the pumps got the CPU they need
+            "state": round(args.vehicles / args.state_interval, 1),
+            "visualization": round(args.vehicles * args.visualization_hz, 1),
+        },
+        "targets": {
+            "state_messages_per_s": state_rate,
+            "control_cpu_le_25pct": cpu["control"] <= 0.25,
+            "state_to_update_p99_le_50ms": latency_p99 is not None and latency_p99 <= 50,
+            "api_to_published_p95_le_500ms": api_p95 is not None and api_p95 <= 500,
+        },
+    }
