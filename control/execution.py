@@ -36,6 +36,7 @@ class LayoutIndex:
     nodes: dict[str, NodePlace]
     edges: dict[tuple[str, str], str]  # (start node, end node) -> edge id
     speed_limits: dict[str, float] = field(default_factory=dict)  # edge id -> m/s, after zones
+    parking: dict[str, str] = field(default_factory=dict)  # PARK station id -> its node id
 
 
 class Phase(enum.StrEnum):

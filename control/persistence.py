@@ -16,7 +16,7 @@ from control.ports import ActiveOrder, FlushBatch
 from fleet.exceptions import DomainError
 from maintenance import selectors as maintenance_selectors
 from maintenance import services as maintenance_services
-from maps.models import Edge, Map, Node
+from maps.models import Edge, Map, Node, Station
 from maps.selectors import edge_speed_limits
 from orders import selectors as order_selectors
 from orders import services as order_services
@@ -58,7 +58,12 @@ class DjangoStore:
                 for edge_id, limit in edge_speed_limits(map=layout).items()
                 if limit is not None
             }
-            layouts[layout.map_id] = LayoutIndex(layout.map_id, nodes, edges, limits)
+            parking = dict(
+                Station.objects.filter(map=layout, kind=Station.Kind.PARK).values_list(
+                    "station_id", "node__node_id"
+                )
+            )
+            layouts[layout.map_id] = LayoutIndex(layout.map_id, nodes, edges, limits, parking)
         return layouts
 
     def load_vehicles(self) -> list[dict[str, Any]]:
@@ -210,7 +215,7 @@ def _open_job(command: dict[str, Any]) -> None:
             move = maintenance_services.send_to_station(
                 vehicle=vehicle,
                 station_id=station,
-                reason="sent by staff",
+                reason=str(command.get("reason") or "sent by staff"),
                 command_id=request if isinstance(request, int) else None,
             )
             status, result = "RUNNING", f"on its way to {move.station.station_id}"

@@ -25,6 +25,7 @@ def build_control_loop() -> ControlLoop:
         interface_name=settings.VDA5050_INTERFACE,
         base_ahead=settings.FLEET_CONTROL["BASE_AHEAD"] or None,
         traffic=settings.FLEET_CONTROL["TRAFFIC"],
+        park_idle=settings.FLEET_CONTROL.get("TRAFFIC_PARK_IDLE", True),
     )
     client, address = make_client(settings.MQTT_URL, client_id_prefix="fleet-control")
     link = MqttLink(client, address.host, address.port, controller)

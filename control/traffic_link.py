@@ -16,10 +16,12 @@ import logging
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import Any
 
 import vda5050
 from control.execution import LayoutIndex, OrderExecution, Window
 from control.live import LiveVehicle
+from control.parking import IdleParking
 from control.session import Link
 from control.traffic_support import (
     DEFAULT_CLASS,
@@ -62,8 +64,12 @@ class TrafficLink:
         *,
         policy: ReleasePolicy | None = None,
         dwell: float = DWELL,
+        park: Callable[[dict[str, Any]], None] | None = None,
     ) -> None:
         self.fleet = fleet
+        # Idle vehicles in the way of an order that finds no plan are sent to park through
+        # `park` (a `vehicle.park` job for the flush); None: they stay (control/parking.py).
+        self.parking = IdleParking(park) if park is not None else None
         self.policy = policy or ReleasePolicy()
         self.dwell = dwell
         self.managers: dict[str, TrafficManager] = {}
@@ -256,9 +262,28 @@ class TrafficLink:
             plan = manager.plan(name(vehicle), [Goal(g, self.dwell) for g in goals], now)
         except (NoPlanError, KeyError) as exc:
             self._count(f"no plan for {order_id}: {exc!r}")
+            if isinstance(exc, NoPlanError) and self.parking is not None:
+                self._clear_way(self.parking, tracked, order_id, goals, now)
             return None
+        if self.parking is not None:
+            self.parking.planned(name(vehicle))
         tracked.order_id, tracked.lost, tracked.offset = order_id, None, 0
         return plan
+
+    def _clear_way(
+        self, parking: IdleParking, tracked: Tracked, order_id: str, goals: list[str], now: float
+    ) -> None:
+        """Send the idle vehicles standing on the order's free-flow route to park."""
+        on_map = {n: t.vehicle for n, t in self.tracked.items() if t.map_id == tracked.map_id}
+        parking.clear_way(
+            self.managers[tracked.map_id],
+            self._indexes[tracked.map_id],
+            name(tracked.vehicle),
+            goals,
+            on_map,
+            now,
+            reason=f"in the way of order {order_id}",
+        )
 
     def ended(self, vehicle: LiveVehicle, now: float) -> None:
         """The vehicle's order is over (finished, failed, cancelled): forget the rest of it."""

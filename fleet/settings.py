@@ -189,6 +189,8 @@ FLEET_CONTROL = {
     # Traffic management (control/traffic_link.py) decides each base; off = BASE_AHEAD only,
     # enough for a single-vehicle site.
     "TRAFFIC": env.bool("FLEET_TRAFFIC", default=True),
+    # Idle vehicles that keep an order from being planned are sent to a park station.
+    "TRAFFIC_PARK_IDLE": env.bool("FLEET_TRAFFIC_PARK_IDLE", default=True),
 }
 # Where control's flush hands finished traffic waits (vehicle held at its decision point): the
 # reports app records them. Wired here because control and reports are independent siblings.
