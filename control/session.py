@@ -94,7 +94,15 @@ class ProtocolSession:
         return woke_up
 
     def timed_out(self, now: float) -> bool:
-        """No state (nor ONLINE) for longer than the vehicle's state interval plus grace."""
+        """No state (nor ONLINE) for longer than the vehicle's state interval plus grace.
+
+        This is how we notice a frozen vehicle (radio loss: its socket stays open) within
+        `defaultStateInterval` + 5 s, whatever the broker does. Its last will only comes once
+        the broker's keepalive sweep finds it silent for 1.5 × keepalive: with Mosquitto 2.0,
+        which sweeps at most every 6 s in whole seconds, 22-29 s after the last packet for the
+        usual 15 s keepalive (docs/RELIABILITY_RESULTS.md, link loss). The interval is the
+        vehicle's own (factsheet), not a guess: a vehicle declaring 30 s may be silent 30 s.
+        """
         if self.last_alive_at is None:
             return False
         return now - self.last_alive_at > self.state_interval + TIMEOUT_GRACE

@@ -46,6 +46,27 @@ def test_a_retained_online_without_states_turns_unreachable_after_the_interval()
     assert session.link(now=30.0 + TIMEOUT_GRACE + 0.1) is Link.UNREACHABLE
 
 
+def test_a_frozen_vehicle_is_unreachable_after_its_declared_interval_plus_grace() -> None:
+    # A vehicle whose factsheet declares a 10 s state interval and then freezes (radio loss,
+    # SIGSTOP): control notices it from the missing states alone, long before the broker's
+    # keepalive (22-29 s with Mosquitto 2.0) publishes its will.
+    session = ProtocolSession(state_interval=10.0)
+    session.on_connection("ONLINE", now=0.0)
+    session.on_state(now=2.0, skew=None)
+
+    assert session.link(now=2.0 + 10.0 + TIMEOUT_GRACE - 0.1) is Link.ONLINE
+    assert session.link(now=2.0 + 10.0 + TIMEOUT_GRACE + 0.1) is Link.UNREACHABLE
+    assert session.reported is Link.ONLINE  # what it said last: the verdict is ours
+
+
+def test_a_vehicle_declaring_the_30_s_maximum_is_not_called_unreachable_before_it() -> None:
+    session = ProtocolSession(state_interval=30.0)
+    session.on_state(now=0.0, skew=None)
+
+    assert session.link(now=29.9) is Link.ONLINE
+    assert session.link(now=30.0 + TIMEOUT_GRACE) is Link.ONLINE
+
+
 def test_a_state_revives_an_unreachable_vehicle_and_asks_for_reconciliation() -> None:
     session = ProtocolSession(state_interval=1.0)
     assert session.on_state(now=0.0, skew=0.2)  # first contact
