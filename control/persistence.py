@@ -21,8 +21,8 @@ from maps.selectors import edge_speed_limits
 from orders import selectors as order_selectors
 from orders import services as order_services
 from orders.models import TransportOrder
+from orders.services import dispatch_queue
 from orders.services import floor as order_floor
-from orders.tasks import dispatch_pending_orders_task
 from robots import services as robot_services
 from robots.models import Vehicle
 
@@ -142,7 +142,7 @@ class DjangoStore:
 
     def request_dispatch(self) -> None:
         try:
-            dispatch_pending_orders_task.delay()
+            dispatch_queue.request_dispatch()  # coalesced with the other requests
         except Exception:
             logger.exception("could not queue dispatch; beat runs it periodically")
 

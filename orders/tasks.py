@@ -16,7 +16,9 @@ from fleet.celery import app
 def dispatch_pending_orders_task() -> int:
     """Run one dispatch cycle; triggered by new orders, finished orders and the beat schedule."""
     from orders import services
+    from orders.services import dispatch_queue
 
+    dispatch_queue.start_cycle()  # first: a request from now on queues one more cycle
     return len(services.dispatch_pending_orders())
 
 

@@ -22,6 +22,7 @@ from orders import capability, selectors
 from orders.assignment import Candidate, Job, plan_batch
 from orders.conf import setting
 from orders.models import OrderEvent, OrderSequence, TransportOrder
+from orders.services.dispatch_factsheets import attach_factsheets
 from orders.services.events import dispatch_on_commit, record, transition
 from orders.services.fit import Capabilities, allowed_vehicles, order_steps, route_through_steps
 from orders.services.vehicle_events import emit_vehicle_order_event
@@ -45,6 +46,7 @@ def dispatch_pending_orders(*, now: datetime | None = None) -> list[TransportOrd
     earliest start wait. Safe to run concurrently: cycles take turns on a PostgreSQL advisory
     lock, an order is claimed with a conditional update, and the database's
     one-active-order-per-vehicle constraint refuses a vehicle that someone else took first.
+    Once the assignments commit, one `order.assigned` command wakes control to send them.
     """
     now = now or timezone.now()
     with _cycle_lock():
@@ -64,6 +66,9 @@ def dispatch_pending_orders(*, now: datetime | None = None) -> list[TransportOrd
                 ready.append(order)
         with subscriptions_read_once():
             assigned = _assign_ready(ready, notes, now, gate)
+        if assigned:  # wakes control to read them at once: one command a cycle, not an order
+            ids = [o.pk for o in assigned]
+            transaction.on_commit(lambda: send_command("order.assigned", orders=ids), robust=True)
         _save_notes(pending, notes)
     return assigned
 
@@ -74,7 +79,8 @@ def _assign_ready(
     if not ready:
         return []
     hold = timedelta(seconds=float(setting("COMMAND_HOLD")))
-    fleet = selectors.get_dispatch_fleet(held_since=now - hold)
+    fleet = selectors.get_dispatch_fleet(held_since=now - hold, with_factsheets=False)
+    attach_factsheets(fleet.idle)  # decoded once per change, not every cycle
     _hold_back(fleet)  # battery (charging, low) and maintenance (out of service)
     if not fleet.idle:
         notes.update(dict.fromkeys((o.pk for o in ready), _fleet_note(fleet)))
@@ -205,10 +211,6 @@ def _assign(
             record(order.pk, OrderEvent.Kind.ASSIGNED, vehicle=str(vehicle), route=route)
             emit_vehicle_order_event(
                 event_type="vehicle.order_assigned", vehicle=vehicle, order_id=order.pk
-            )
-            order_id = order.pk
-            transaction.on_commit(
-                lambda: send_command("order.assigned", order=order_id), robust=True
             )
             broadcast_on_commit(LIVE_GROUP, "orders.changed", {"order": order.pk})
     except IntegrityError:

@@ -11,6 +11,7 @@ from django.utils import timezone
 
 from fleet.realtime import LIVE_GROUP, broadcast_on_commit
 from orders.models import OrderEvent, TransportOrder
+from orders.services import dispatch_queue
 from orders.services.webhooks import emit_order_event
 
 WEBHOOK_EVENT = {kind: f"order.{kind.lower()}" for kind in OrderEvent.Kind.values}
@@ -43,8 +44,7 @@ def who(user: AbstractBaseUser | AnonymousUser | None) -> str:
 
 
 def dispatch_on_commit() -> None:
-    """Run a dispatch cycle once the current transaction commits. A failure there (the broker is
-    down, say) is logged and never undoes or fails the caller: beat runs dispatch anyway."""
-    from orders.tasks import dispatch_pending_orders_task
-
-    transaction.on_commit(dispatch_pending_orders_task.delay, robust=True)
+    """Ask for a dispatch cycle once the current transaction commits (coalesced with the other
+    requests, see `dispatch_queue`). A failure there (the broker is down, say) is logged and never
+    undoes or fails the caller: beat runs dispatch anyway."""
+    transaction.on_commit(dispatch_queue.request_dispatch, robust=True)

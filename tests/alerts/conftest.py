@@ -16,7 +16,9 @@ from tests.alerts.harness import Clock, Harness
 @pytest.fixture
 def clock(monkeypatch: pytest.MonkeyPatch) -> Clock:
     fake = Clock()
-    fake_time = SimpleNamespace(monotonic=fake, time=time.time, perf_counter=time.perf_counter)
+    fake_time = SimpleNamespace(
+        monotonic=fake, time=time.time, perf_counter=time.perf_counter, sleep=time.sleep
+    )
     for module in ("control.live", "control.controller"):
         monkeypatch.setattr(f"{module}.time", fake_time)
     monkeypatch.setattr(alert_observe, "_observer", alert_observe.SnapshotObserver(clock=fake))

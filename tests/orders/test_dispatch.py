@@ -225,6 +225,32 @@ def test_dispatch_task_and_reconcile_task_run_the_services(station) -> None:
     assert reconcile_assignments_task.delay().get() == 0
 
 
+def test_a_cycle_wakes_control_once_for_all_its_assignments(
+    station, sent_commands, django_capture_on_commit_callbacks
+) -> None:
+    VehicleFactory(last_node_id="A0.3")
+    VehicleFactory(last_node_id="A3.3")
+    orders = [new_order(station, "PICK-2"), new_order(station, "PICK-4")]
+
+    with django_capture_on_commit_callbacks(execute=True):
+        services.dispatch_pending_orders()
+        assert sent_commands == []  # not before the assignments commit
+
+    assert [kind for kind, _ in sent_commands] == ["order.assigned"]
+    assert sorted(sent_commands[0][1]["orders"]) == sorted(o.pk for o in orders)
+
+
+def test_a_cycle_without_assignments_does_not_wake_control(
+    station, sent_commands, django_capture_on_commit_callbacks
+) -> None:
+    new_order(station)
+
+    with django_capture_on_commit_callbacks(execute=True):
+        services.dispatch_pending_orders()
+
+    assert sent_commands == []
+
+
 def test_orders_on_a_map_without_idle_vehicles_say_so(station) -> None:
     VehicleFactory(map_id="hall-2", last_node_id="X")
     order = new_order(station)
