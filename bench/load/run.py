@@ -87,7 +87,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     db_url = f"{args.postgres}/{args.database}"
     create_database(admin_url, args.database)
     # A fresh start (a left-over snapshot or queued tasks of an earlier run would count).
-    redis.Redis.from_url(args.redis).delete(SNAPSHOT_KEY, "celery", "fleet:control:commands")
+    redis.Redis.from_url(args.redis).delete(
+        SNAPSHOT_KEY, "celery", "fleet:control:commands", "fleet:dispatch:requested"
+    )
     interface = f"load{os.getpid()}"
     env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")}
     env.update(
