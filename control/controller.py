@@ -27,7 +27,7 @@ from control.live import Fleet, InstantActionTrack, LiveVehicle
 from control.message_log import IN, MessageLog
 from control.ports import ActiveOrder, FlushBatch, Store
 from control.publisher import ProtocolLimitError, Publish, Publisher
-from control.session import Verdict
+from control.session import PROBE_AFTER, PROBE_GRACE, Verdict
 from control.traffic_link import TrafficLink
 from control.versions import to_model, wire_version
 from control.wait_log import WaitLog
@@ -65,10 +65,14 @@ class Controller:
         base_ahead: int | None = None,
         traffic: bool = False,
         park_idle: bool = True,
+        liveness_probe_after: float = PROBE_AFTER,
+        liveness_probe_grace: float = PROBE_GRACE,
     ) -> None:
         self.store = store
         self.interface_name = interface_name
         self.fleet = Fleet()
+        # A vehicle silent this long gets one stateRequest (0 = never; control.session).
+        self.probe_after, self.probe_grace = liveness_probe_after, liveness_probe_grace
         self.layouts: dict[str, LayoutIndex] = {}
         self.counters: Counter[str] = Counter()
         self._topics: dict[str, Topic] = {}  # topic text -> parsed (see _parse_topic)
@@ -355,6 +359,8 @@ class Controller:
         return batch
 
     def _collect_vehicle(self, vehicle: LiveVehicle, batch: FlushBatch, now: float) -> None:
+        if vehicle.session.probe_due(now, self.probe_after):
+            self._probe(vehicle, now)
         link = vehicle.session.link(now)
         if link is not vehicle.last_link:  # e.g. ONLINE -> UNREACHABLE on timeout
             vehicle.last_link = link
@@ -377,6 +383,23 @@ class Controller:
         if vehicle.factsheet_changed and vehicle.factsheet is not None:
             batch.factsheets[vehicle.pk] = vehicle.factsheet
             vehicle.factsheet_changed = False
+
+    def _probe(self, vehicle: LiveVehicle, now: float) -> None:
+        """Ask a silent vehicle for its state (control.session: liveness probe). Not when it
+        may not take a stateRequest (factsheet, mode: E.25, I.39; its state timeout still
+        applies) nor when we may not publish (standby): no answer would then mean nothing."""
+        state = vehicle.state
+        mode = str(state.operating_mode) if state is not None else None
+        if not self.publisher.may_publish() or refuse_instant_action(
+            vehicle.capabilities, mode, "stateRequest", {}
+        ):
+            return
+        try:
+            self.publisher.instant_action(vehicle, "stateRequest")
+        except ProtocolLimitError:  # J.44, e.g. a topic too long for it: counted, not sent
+            return
+        vehicle.session.on_probe(now, self.probe_grace)
+        self.counters["liveness_probes"] += 1
 
     def flush(self) -> None:
         """Write one batch; on a database error the batch is put back and retried next time."""

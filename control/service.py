@@ -10,6 +10,7 @@ from control.metrics import ControlMetrics, start_snapshots
 from control.observer import SnapshotObserver
 from control.persistence import DjangoStore, observe_floor
 from control.runner import ControlLoop, MqttLink
+from control.session import PROBE_AFTER
 from fleet.control_queue import receive_commands
 from fleet.mqtt import make_client
 from fleet.realtime import LIVE_GROUP, broadcast, broadcast_json, vehicle_group
@@ -26,6 +27,7 @@ def build_control_loop() -> ControlLoop:
         base_ahead=settings.FLEET_CONTROL["BASE_AHEAD"] or None,
         traffic=settings.FLEET_CONTROL["TRAFFIC"],
         park_idle=settings.FLEET_CONTROL.get("TRAFFIC_PARK_IDLE", True),
+        liveness_probe_after=settings.FLEET_CONTROL.get("LIVENESS_PROBE_AFTER", PROBE_AFTER),
     )
     client, address = make_client(settings.MQTT_URL, client_id_prefix="fleet-control")
     link = MqttLink(client, address.host, address.port, controller)

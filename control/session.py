@@ -5,6 +5,11 @@ Pure logic, driven by the controller with the receive time. REFERENCE H.38: the 
 that is gone), so liveness also needs a state timeout. REFERENCE §2: header ids count per topic;
 we drop duplicates and older messages of the same connection, count gaps, and start counting
 afresh after a new ONLINE. Vehicle timestamps are never used for ordering, only to show skew.
+
+Liveness probe: a vehicle may declare up to 30 s between states, so its state timeout alone
+notices a freeze only after 35 s, and the broker's will after 22-29 s. A vehicle silent for
+`probe_after` seconds is sent one stateRequest (REFERENCE §4; the controller sends it only if
+the vehicle takes it, E.25, I.39); no state within PROBE_GRACE and it is UNREACHABLE.
 """
 
 import enum
@@ -13,6 +18,8 @@ from dataclasses import dataclass, field
 
 DEFAULT_STATE_INTERVAL = 30.0  # seconds; REFERENCE F.30 "at the latest every 30 s"
 TIMEOUT_GRACE = 5.0  # seconds on top of the interval before a vehicle counts as unreachable
+PROBE_AFTER = 10.0  # s of silence before a stateRequest probe (FLEET_CONTROL LIVENESS_PROBE_AFTER)
+PROBE_GRACE = 5.0  # s a probed vehicle has to answer before it counts as unreachable
 HEADER_WRAP = 2**32
 
 
@@ -45,6 +52,10 @@ class ProtocolSession:
     last_alive_at: float | None = None  # last state or ONLINE, our monotonic clock
     state_interval: float = DEFAULT_STATE_INTERVAL
     clock_skew: float | None = None  # seconds our clock is ahead of the vehicle's
+    # 3.0 HIBERNATING: connected but sends no states by design, so never probed. Only a
+    # connection message ends it, not a state (the last one may arrive just after it).
+    hibernating: bool = False
+    probe_deadline: float | None = None  # a stateRequest probe is out: answer by then
     counters: Counter[str] = field(default_factory=Counter)
     _last_header: dict[str, int] = field(default_factory=dict)
     _last_online: tuple[int, str] | None = None  # (headerId, timestamp) of the last ONLINE
@@ -72,6 +83,7 @@ class ProtocolSession:
         vehicle (re)connected and needs a stateRequest and factsheetRequest to reconcile."""
         link = _REPORTED.get(reported) or Link(reported)
         reconnected = link is Link.ONLINE and self.link(now) is not Link.ONLINE
+        self.hibernating = reported == "HIBERNATING"
         if link is Link.ONLINE:
             # A new connection may restart header ids at 0: accept whatever comes next. The
             # same retained ONLINE again (our own re-subscribe after a broker reconnect) is no
@@ -80,6 +92,7 @@ class ProtocolSession:
                 self._last_header.clear()
             self._last_online = identity
             self.last_alive_at = now
+            self.probe_deadline = None  # alive: the silence episode is over
         self.reported = link
         return reconnected
 
@@ -87,6 +100,7 @@ class ProtocolSession:
         """Take a state; True if the vehicle was silent or unknown before (reconcile it)."""
         woke_up = self.last_state_at is None or self.timed_out(now)
         self.last_state_at = self.last_alive_at = now
+        self.probe_deadline = None  # answered (or just talking): the silence episode is over
         self.clock_skew = skew
         if self.reported is not Link.ONLINE:
             # A vehicle that sends state is connected, whatever a stale retained message said.
@@ -105,7 +119,29 @@ class ProtocolSession:
         """
         if self.last_alive_at is None:
             return False
+        if self.probe_deadline is not None and now > self.probe_deadline:
+            return True  # probed and no answer in time (see the module docstring)
         return now - self.last_alive_at > self.state_interval + TIMEOUT_GRACE
+
+    def probe_due(self, now: float, after: float = PROBE_AFTER) -> bool:
+        """Whether to send this ONLINE vehicle a stateRequest now: silent (no state, no ONLINE)
+        for more than `after` seconds (0 = never), not probed yet in this silence episode,
+        not hibernating, and declaring a longer state interval than `after` (else its own
+        state timeout is as quick). A vehicle may be silent up to its interval, so the probe
+        is a question, not a verdict: only no answer within the grace makes it unreachable."""
+        return (
+            after > 0
+            and self.state_interval > after
+            and self.probe_deadline is None
+            and not self.hibernating
+            and self.last_alive_at is not None
+            and now - self.last_alive_at > after
+            and self.link(now) is Link.ONLINE
+        )
+
+    def on_probe(self, now: float, grace: float = PROBE_GRACE) -> None:
+        """A stateRequest probe went out at `now`: a state or ONLINE must come within `grace`."""
+        self.probe_deadline = now + grace
 
     def link(self, now: float) -> Link:
         """The connection as the registry and dispatch should see it right now."""

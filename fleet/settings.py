@@ -191,6 +191,9 @@ FLEET_CONTROL = {
     "TRAFFIC": env.bool("FLEET_TRAFFIC", default=True),
     # Idle vehicles that keep an order from being planned are sent to a park station.
     "TRAFFIC_PARK_IDLE": env.bool("FLEET_TRAFFIC_PARK_IDLE", default=True),
+    # Seconds of silence before control sends a vehicle one stateRequest; no state within 5 s
+    # = UNREACHABLE (a frozen vehicle declaring a 30 s state interval: ~16 s, not 35). 0 = off.
+    "LIVENESS_PROBE_AFTER": env.float("FLEET_LIVENESS_PROBE_AFTER", default=10.0),
 }
 # Where control's flush hands finished traffic waits (vehicle held at its decision point): the
 # reports app records them. Wired here because control and reports are independent siblings.

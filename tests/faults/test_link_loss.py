@@ -17,8 +17,10 @@ def test_a_killed_and_a_frozen_vehicle_are_detected_in_time_and_keep_their_order
     assert figures["events"] == {"SIGKILL": 1, "SIGSTOP": 1}
     # A killed vehicle's socket closes: the broker sends its will at once.
     assert figures["detected_as"]["SIGKILL"] == {"CONNECTIONBROKEN": 1}
-    # A frozen one keeps its socket: control's own state timeout (declared interval + 5 s)
-    # notices it before Mosquitto's keepalive sweep sends the will.
+    # A frozen one keeps its socket. It declares the VDA maximum of 30 s between states, so
+    # its state timeout (35 s) and Mosquitto's will (22-29 s) would both be too late: control's
+    # liveness probe (a stateRequest after 10 s of silence, 5 s to answer) notices it first.
+    assert figures["state_interval_s"] == 30.0
     assert figures["detected_as"]["SIGSTOP"] == {"UNREACHABLE": 1}
     assert figures["detect_stop_s_max"] <= figures["detect_limit_s"]
     assert figures["will_after_stop_s_max"] > figures["detect_stop_s_max"]

@@ -3,8 +3,9 @@ simulator process; one driving an order is SIGKILLed (socket closes: the broker 
 will at once) or SIGSTOPped (radio loss: the socket stays open), then restarted or SIGCONTed.
 
 Two paths can notice a frozen (SIGSTOPped) vehicle, and the row times both:
-- control's own state timeout (`control/session.py`): no state for the vehicle's factsheet
-  `defaultStateInterval` + 5 s → UNREACHABLE. The vehicles here declare STATE_INTERVAL_S.
+- control (`control/session.py`): silent for LIVENESS_PROBE_AFTER (10 s) → one stateRequest;
+  no state within 5 s → UNREACHABLE (else its state timeout: the factsheet's
+  `defaultStateInterval` + 5 s). The vehicles here declare STATE_INTERVAL_S, the VDA maximum.
 - the broker's will: Mosquitto 2.0 drops a silent client only when its keepalive sweep (at most
   every 6 s: `last_keepalive_check + 5 < now`, whole seconds) finds it silent for more than
   keepalive*3/2 (integer) = 22 s, i.e. 22-29 s after the last packet; then CONNECTIONBROKEN.
@@ -29,9 +30,9 @@ from bench.faults.harness import Feeder, row_context, verdict, wait_all_closed, 
 
 VEHICLES = 3
 KEEPALIVE_S = 15  # simulator.mqtt.KEEPALIVE_SECONDS, REFERENCE §2 "around 15 s"
-# Declared in the vehicles' factsheets (defaultStateInterval): well inside VDA's 30 s maximum,
-# and short enough that control's own timeout (+ 5 s grace) comes before the broker's will.
-STATE_INTERVAL_S = 10.0
+# Declared in the vehicles' factsheets (defaultStateInterval): VDA's 30 s maximum, the worst
+# case: only control's liveness probe (stateRequest after 10 s of silence) comes before the will.
+STATE_INTERVAL_S = 30.0
 
 
 def _connection(serial: str) -> str:
@@ -67,7 +68,7 @@ def _collect_driving(found: list[str], serials: set[str]) -> bool:
 
 class FalseAlarms(threading.Thread):
     """Counts vehicles that were not hit but went from ONLINE to anything else (a state
-    timeout too tight for the vehicles' real cadence would show here)."""
+    timeout or a probe too tight for the vehicles' real cadence would show here)."""
 
     def __init__(self, serials: set[str]) -> None:
         super().__init__(daemon=True)
