@@ -19,7 +19,7 @@ def clock(monkeypatch: pytest.MonkeyPatch) -> Clock:
     fake_time = SimpleNamespace(
         monotonic=fake, time=time.time, perf_counter=time.perf_counter, sleep=time.sleep
     )
-    for module in ("control.live", "control.controller"):
+    for module in ("control.live", "control.controller", "control.periodic"):
         monkeypatch.setattr(f"{module}.time", fake_time)
     monkeypatch.setattr(alert_observe, "_observer", alert_observe.SnapshotObserver(clock=fake))
     monkeypatch.setattr(inventory_observe, "_observer", inventory_observe.LoadObserver(clock=fake))
