@@ -10,6 +10,9 @@ handed over without waiting, over connections that stay open.
 
 Sends are serialised in the order they were handed over: the live page gets only the changes
 (`control.snapshots.LiveDeltas`), so two snapshots must not overtake each other.
+
+After a Redis loss the loop goes on by itself: sends fail while Redis is away and the next one
+after it returns opens a new connection (bench/faults redis row: no restart of control).
 """
 
 import asyncio
@@ -24,6 +27,7 @@ from fleet import realtime
 
 logger = logging.getLogger(__name__)
 
+SEND_TIMEOUT_S = 5.0
 _started: list[asyncio.AbstractEventLoop] = []  # the process's loop once started
 _lock = threading.Lock()
 
@@ -59,11 +63,15 @@ def start() -> asyncio.AbstractEventLoop | None:
 def _in_order(
     group_send: Callable[[str, dict[str, Any]], Awaitable[None]],
 ) -> Callable[[str, dict[str, Any]], Awaitable[None]]:
-    """`group_send` one at a time: asyncio.Lock wakes its waiters first come, first served."""
+    """`group_send` one at a time: asyncio.Lock wakes its waiters first come, first served.
+
+    Each send gets SEND_TIMEOUT_S: the layer's sockets have no read timeout (settings), so a
+    send stuck on a Redis that stopped answering would otherwise hold up every later one for
+    good. A failed send fails alone (fleet.realtime logs it) and the next one reconnects."""
     turn = asyncio.Lock()
 
     async def send(group: str, message: dict[str, Any]) -> None:
         async with turn:
-            await group_send(group, message)
+            await asyncio.wait_for(group_send(group, message), SEND_TIMEOUT_S)
 
     return send

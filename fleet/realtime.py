@@ -3,6 +3,7 @@
 import asyncio
 import logging
 from collections.abc import Mapping
+from concurrent.futures import Future
 from typing import Any
 
 import msgspec
@@ -66,11 +67,36 @@ def _send(layer: Any, group: str, message: dict[str, Any]) -> None:
     try:
         loop = _web_loop
         if loop is not None and not loop.is_closed() and not _running_on(loop):
-            asyncio.run_coroutine_threadsafe(layer.group_send(group, message), loop)
+            future = asyncio.run_coroutine_threadsafe(layer.group_send(group, message), loop)
+            future.add_done_callback(_outages.sent)
         else:
             async_to_sync(layer.group_send)(group, message)
     except Exception:  # a broken channel layer must never break the caller
         logger.exception("broadcast to %s failed", group)
+
+
+class _Outages:
+    """Logs sends handed to the loop that failed (nobody awaits them): the first of a run of
+    failures and the recovery, not each of control's 5 broadcasts a second while Redis is down.
+    The channel layer itself reconnects on the next send (the retry in settings.CHANNEL_LAYERS).
+    """
+
+    def __init__(self) -> None:
+        self.failed = 0
+
+    def sent(self, future: Future[None]) -> None:
+        error = None if future.cancelled() else future.exception()
+        if error is None:
+            if self.failed:
+                logger.warning("broadcasts recovered after %d failed sends", self.failed)
+            self.failed = 0
+            return
+        if not self.failed:
+            logger.error("broadcasts failing: %r", error)
+        self.failed += 1
+
+
+_outages = _Outages()
 
 
 def broadcast_on_commit(group: str, event_type: str, payload: Mapping[str, Any]) -> None:

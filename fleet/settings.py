@@ -123,13 +123,26 @@ DEFAULT_AUTO_FIELD = "django.db.models.BigAutoField"
 # Redis: Celery broker, channel layer and control's command queue. Unset = embedded stand-ins.
 REDIS_URL = env.str("REDIS_URL", default="")
 if REDIS_URL:
+    from redis.asyncio.retry import Retry
+    from redis.backoff import ExponentialBackoff
+    from redis.exceptions import ConnectionError as RedisConnectionError
+
     CHANNEL_LAYERS = {
         "default": {
             "BACKEND": "channels_redis.core.RedisChannelLayer",
             # channels_redis waits 5 s per receive; redis-py 8 would time the read out at 5 s
             # and drop idle websockets (django/channels_redis#422), so no socket timeout.
+            # After a Redis restart a pooled connection can be dead: retry a command on a new
+            # one instead of failing the websocket's connect (bench/faults redis row).
             "CONFIG": {
-                "hosts": [{"address": REDIS_URL, "socket_timeout": None}],
+                "hosts": [
+                    {
+                        "address": REDIS_URL,
+                        "socket_timeout": None,
+                        "retry": Retry(ExponentialBackoff(cap=0.5, base=0.05), 3),
+                        "retry_on_error": [RedisConnectionError],
+                    }
+                ],
                 "capacity": 1000,
                 "expiry": 10,
             },

@@ -16,8 +16,11 @@ const TABLE_INTERVAL_MS = 1000;
 const ORDERS_MIN_INTERVAL_MS = 1000;
 const ORDERS_POLL_MS = 10000;
 const RECONNECT_MIN_MS = 1000;
-const RECONNECT_MAX_MS = 30000;
+// At most ~3 s between attempts: a page must be live again within 5 s of the server (or its
+// Redis) coming back (RELIABILITY.md §5); at 30 s it could stay stale for half a minute.
+const RECONNECT_MAX_MS = 3000;
 const LIVE_DATA_FRESH_MS = 2000; // database rows do not overwrite live rows younger than this
+const CATCH_UP_AGAIN_MS = 2000; // after a reconnect the database is read again this much later
 const ROUTE_STATUSES = new Set(["driving", "busy", "paused", "error"]);
 
 const vehicles = new Map(); // vehicle key -> latest row
@@ -59,6 +62,7 @@ function applyVehicleUpdate(rows, changes) {
     for (const field in change) {
       if (change[field] === null) delete row[field];
       else row[field] = change[field];
+      if (row.sinceOpen) row.sinceOpen.add(field);
     }
     row.liveAt = now;
     if (map) map.setVehicle(row, now);
@@ -81,6 +85,10 @@ function applyVehicleSnapshot(rows) {
   for (const row of rows) {
     const key = vehicleKey(row);
     const known = vehicles.get(key);
+    if (known && known.sinceOpen) {
+      catchUp(known, row, now);
+      continue;
+    }
     if (known && isLiveFresh(known, now)) continue;
     const { base: _base, horizon: _horizon, ...fields } = row; // routes come only live
     const merged = known ? { ...known, ...fields } : { ...row };
@@ -89,6 +97,20 @@ function applyVehicleSnapshot(rows) {
     if (map) map.setVehicle(merged, now);
   }
   tableDirty = true;
+}
+
+// A row from before a reconnect that no whole live row replaced yet: control sends only what
+// changed and counts what it sent while the socket (or Redis) was down as delivered, so its
+// fields are as old as the outage except those changed since the reconnect. The database has
+// the others (flushed twice a second); it knows no routes or transport orders (null there).
+function catchUp(known, row, now) {
+  for (const field in row) {
+    if (row[field] !== null && field !== "base" && field !== "horizon" && !known.sinceOpen.has(field)) {
+      known[field] = row[field];
+    }
+  }
+  if (!ROUTE_STATUSES.has(known.status) && !known.sinceOpen.has("base")) Object.assign(known, { base: [], horizon: [] });
+  if (map) map.setVehicle(known, now);
 }
 
 function isLiveFresh(row, now) {
@@ -209,8 +231,11 @@ function onSocketOpen() {
   socketState.attempts = 0;
   setConnection("live", "live");
   if (reconnected) {
-    // Events were missed while the socket was down: catch up from the database.
+    // Events were missed while the socket was down: catch up from the database (`catchUp`),
+    // now and once more when sends that failed just after the outage would have come.
+    for (const row of vehicles.values()) row.sinceOpen = new Set();
     refreshVehicles();
+    setTimeout(refreshVehicles, CATCH_UP_AGAIN_MS);
     scheduleOrdersRefresh();
   }
 }
@@ -247,7 +272,7 @@ function onSocketClose(event) {
     setConnection("signed-out", event.code === 4401 ? "signed out – reload to log in" : "no permission");
     return;
   }
-  // Exponential backoff with jitter: 1 s, 2 s, 4 s … up to 30 s.
+  // Exponential backoff with jitter: 1 s, 2 s, then every 3 s.
   const delay = Math.min(RECONNECT_MAX_MS, RECONNECT_MIN_MS * 2 ** socketState.attempts);
   const jittered = delay * (0.75 + Math.random() * 0.5);
   socketState.attempts += 1;
