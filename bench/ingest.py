@@ -4,6 +4,9 @@ Compares, in one run, the bare msgspec decode of a realistic state message (the 
 `Controller.handle_message` (topic parse, decode, live-model update, order tracking, dirty
 marking), and the flush/broadcast collection that runs once per interval. The DESIGN budget is
 ~45 µs per message for paho + decode; the ratio says what our handling adds on top of decoding.
+Visualization messages (up to 10 a second per vehicle, control keeps only the position) are
+measured the same way, and the share of one core that issue 11's load takes (2,000 states and
+1,000 visualizations a second, through the paho callback) is derived from both.
 """
 
 import argparse
@@ -91,6 +94,22 @@ def state_message(serial: str, header_id: int) -> bytes:
     return vda5050.encode(message)
 
 
+def visualization_message(serial: str, header_id: int) -> bytes:
+    """A moving vehicle's visualization: position and velocity."""
+    message = vda5050.Visualization(
+        header_id=header_id,
+        timestamp=vda5050.now_timestamp("2.0.0"),
+        version="2.0.0",
+        manufacturer="bench",
+        serial_number=serial,
+        agv_position=vda5050.AgvPosition(
+            x=4.2, y=0.5, theta=1.57, map_id="bench", position_initialized=True
+        ),
+        velocity=vda5050.Velocity(vx=1.0, vy=0.0, omega=0.1),
+    )
+    return vda5050.encode(message)
+
+
 def _link(controller: Controller) -> Callable[[mqtt.MQTTMessage], None]:
     """control's real inbound path without a socket: paho's callback as `MqttLink` sets it,
     wrapped by `ControlMetrics` (counting and timing) exactly as `control.service` does."""
@@ -145,6 +164,8 @@ def measure(vehicles: int, messages: int) -> dict[str, float]:
     assert all(v.execution is not None for v in controller.fleet.vehicles.values())
 
     decode_s = handle_s = link_s = 0.0
+    viz_decode_s = viz_handle_s = viz_link_s = 0.0
+    viz_topics = [f"uagv/v2/bench/AGV-{i}/visualization" for i in range(vehicles)]
     rounds = max(1, messages // vehicles // 2)  # half directly, half through the link
     header_id = 1
     for _round in range(rounds):
@@ -166,6 +187,24 @@ def measure(vehicles: int, messages: int) -> dict[str, float]:
         for message in wrapped:
             deliver(message)
         link_s += time.process_time() - start
+        # Visualizations have header ids of their own: the same numbering works.
+        visuals = [visualization_message(f"AGV-{i}", header_id) for i in range(vehicles)]
+        start = time.process_time()
+        for payload in visuals:
+            vda5050.decode(vda5050.TopicKind.VISUALIZATION, payload)
+        viz_decode_s += time.process_time() - start
+        start = time.process_time()
+        for topic, payload in zip(viz_topics, visuals, strict=True):
+            controller.handle_message(topic, payload)
+        viz_handle_s += time.process_time() - start
+        wrapped = [
+            _message(topic, visualization_message(f"AGV-{i}", header_id + 1))
+            for i, topic in enumerate(viz_topics)
+        ]
+        start = time.process_time()
+        for message in wrapped:
+            deliver(message)
+        viz_link_s += time.process_time() - start
     count = rounds * vehicles
     applied = controller.counters
     assert applied["duplicate"] == 0, dict(applied)
@@ -178,6 +217,9 @@ def measure(vehicles: int, messages: int) -> dict[str, float]:
     assert len(rows) == vehicles
     assert controller.counters["decode_errors"] == 0
     decode_us, handle_us, link_us = (t / count * 1e6 for t in (decode_s, handle_s, link_s))
+    viz_decode_us, viz_handle_us, viz_link_us = (
+        t / count * 1e6 for t in (viz_decode_s, viz_handle_s, viz_link_s)
+    )
     return {
         "decode_us_per_msg": decode_us,
         "handle_us_per_msg": handle_us,
@@ -185,6 +227,11 @@ def measure(vehicles: int, messages: int) -> dict[str, float]:
         "handle_to_decode_ratio": handle_us / decode_us,
         "messages_per_core_second": 1e6 / link_us,
         "flush_and_broadcast_collect_ms": collect_ms,
+        "visualization_decode_us_per_msg": viz_decode_us,
+        "visualization_handle_us_per_msg": viz_handle_us,
+        "visualization_link_us_per_msg": viz_link_us,
+        # issue 11's load: 2,000 states and 1,000 visualizations a second (target <= 25 %)
+        "issue11_core_percent": (2000 * link_us + 1000 * viz_link_us) / 1e6 * 100,
     }
 
 
@@ -204,6 +251,15 @@ def main() -> None:
     print(
         f"  + paho callback, metrics   {figures['link_us_per_msg']:7.1f} µs/msg "
         f"({figures['messages_per_core_second']:,.0f} msg/s per core, CPU time)"
+    )
+    print(
+        f"  visualization: decode      {figures['visualization_decode_us_per_msg']:7.1f} µs/msg, "
+        f"handle_message {figures['visualization_handle_us_per_msg']:.1f}, "
+        f"+ paho, metrics {figures['visualization_link_us_per_msg']:.1f}"
+    )
+    print(
+        f"  2,000 states/s + 1,000 visualizations/s: {figures['issue11_core_percent']:.1f} % "
+        "of one core (CPU time, target <= 25 %)"
     )
     print(
         f"  flush+broadcast collection {figures['flush_and_broadcast_collect_ms']:7.1f} ms "

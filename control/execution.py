@@ -109,6 +109,10 @@ class OrderExecution:
     window: Window | None = None  # what the latest message carried
     kind: str = "transport"  # or "charge", "park" (control.ports.ActiveOrder.kind)
     retries: dict[str, int] = field(default_factory=dict)  # 3.0 retry sent, by action id
+    # The actionStates `observe` last went through and whether all our actions had ended then:
+    # states repeat them unchanged most of the time, and then there is nothing new in them.
+    _seen_actions: list[Any] | None = field(default=None, init=False, repr=False, compare=False)
+    _actions_ended: bool = field(default=False, init=False, repr=False, compare=False)
 
     @property
     def awaiting_confirmation(self) -> bool:
@@ -214,41 +218,53 @@ class OrderExecution:
 
     def observe(self, state: vda5050.State) -> list[Progress]:
         """Progress events that `state` reveals (acceptance, actions done, completion, failure)."""
-        if self.phase is Phase.DONE:
+        phase = self.phase
+        if phase is Phase.DONE:
             return []
-        statuses = {a.action_id: str(a.action_status) for a in state.action_states}
-        if self.phase is Phase.CANCELLING:
+        if phase is Phase.CANCELLING:
             # Also when the vehicle never took the order: its cancelOrder then fails with
             # noOrderToCancel, which ends the cancellation just as well.
-            return self._cancel_progress(statuses)
+            return self._cancel_progress(_statuses(state))
         if state.order_id != self.vda_order_id:
             return self._rejection(state)
         events: list[Progress] = []
-        if self.phase is Phase.SENT:
+        if phase is Phase.SENT:
             self.phase = Phase.RUNNING
             events.append(Progress("started", self.transport_order_id))
-        self.confirmed_update = max(self.confirmed_update, state.order_update_id)
+        if state.order_update_id > self.confirmed_update:
+            self.confirmed_update = state.order_update_id
         if self.awaiting_confirmation and (rejected := self._rejection_error(state)):
             self.phase = Phase.DONE
             return [*events, Progress("failed", self.transport_order_id, {"reason": rejected})]
-        for action_id, step in self.action_steps.items():
-            status = statuses.get(action_id)
-            if status == "FAILED":
-                self.phase = Phase.DONE
-                reason = _action_failure(step, self.retries.get(action_id, 0), state, action_id)
-                return [*events, Progress("failed", self.transport_order_id, {"reason": reason})]
-            if status == "FINISHED" and action_id not in self.steps_done:
-                self.steps_done.add(action_id)
-                events.append(
-                    Progress("step", self.transport_order_id, self._step_detail(action_id, step))
-                )
-        if self._is_complete(state, statuses):
+        actions = state.action_states
+        # Unchanged actionStates (Struct equality, in C) hold nothing new: a FAILED one would
+        # have ended the order and every FINISHED one is in steps_done already.
+        if actions != self._seen_actions:
+            statuses = _statuses(state)
+            action_steps = self.action_steps
+            for action_id, step in action_steps.items():
+                status = statuses.get(action_id)
+                if status == "FAILED":
+                    self.phase = Phase.DONE
+                    retries = self.retries.get(action_id, 0)
+                    reason = _action_failure(step, retries, state, action_id)
+                    failed = Progress("failed", self.transport_order_id, {"reason": reason})
+                    return [*events, failed]
+                if status == "FINISHED" and action_id not in self.steps_done:
+                    self.steps_done.add(action_id)
+                    detail = self._step_detail(action_id, step)
+                    events.append(Progress("step", self.transport_order_id, detail))
+            self._seen_actions = actions
+            self._actions_ended = all(statuses.get(a) in TERMINAL for a in action_steps)
+        if self._actions_ended and self._is_complete(state):
             self.phase = Phase.DONE
             events.append(Progress("finished", self.transport_order_id))
         return events
 
     def fatal_error(self, state: vda5050.State) -> Progress | None:
         """A FATAL error ends the order: the vehicle cannot go on without a human."""
+        if not state.errors:  # the usual case, once per state
+            return None
         fatal = [e for e in state.errors if str(e.error_level) == "FATAL"]
         if not fatal or self.phase is Phase.DONE:
             return None
@@ -280,13 +296,13 @@ class OrderExecution:
         self.cancel_action_id = f"cancel-{uuid.uuid4().hex[:16]}"
         return self.cancel_action_id
 
-    def _is_complete(self, state: vda5050.State, statuses: dict[str, str]) -> bool:
+    def _is_complete(self, state: vda5050.State) -> bool:
+        """The order's end, but for its actions (`observe` checks those)."""
         return (
             self.fully_released
             and not self.awaiting_confirmation
             and not state.node_states
             and not state.edge_states
-            and all(statuses.get(a) in TERMINAL for a in self.action_steps)
             and state.last_node_id == self.route[-1]
         )
 
@@ -317,6 +333,11 @@ class OrderExecution:
             if ("orderId", self.vda_order_id) in refs:
                 return rejection_reason(error)  # 3.0 types explained (C.18)
         return None
+
+
+def _statuses(state: vda5050.State) -> dict[str, str]:
+    """actionStatus by actionId."""
+    return {a.action_id: str(a.action_status) for a in state.action_states}
 
 
 def _action_failure(step: str, retries: int, state: vda5050.State, action_id: str) -> str:

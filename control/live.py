@@ -86,10 +86,12 @@ class LiveVehicle:
         self.state = state
         self.version = state.version or self.version
         self.last_seen = received_at
-        if state.agv_position is not None:
-            self.visual_position = state.agv_position
-        self.follow_instant_actions(state)
-        self.mark_changed()
+        position = state.agv_position
+        if position is not None:
+            self.visual_position = position
+        if self.instant_actions:  # nothing to follow before control sent one
+            self.follow_instant_actions(state)
+        self.needs_flush = self.needs_broadcast = True  # mark_changed, inlined: every state
         return woke_up
 
     def apply_connection(self, message: vda5050.Connection, *, received_at: datetime) -> bool:
@@ -135,8 +137,9 @@ class LiveVehicle:
 
     def follow_instant_actions(self, state: vda5050.State) -> None:
         """Update the tracked instant actions from the state's actionStates (2.x lists them)."""
+        tracked_by_id = self.instant_actions
         for action_state in state.action_states:
-            tracked = self.instant_actions.get(action_state.action_id)
+            tracked = tracked_by_id.get(action_state.action_id)
             if tracked is not None and tracked.status != str(action_state.action_status):
                 tracked.status = str(action_state.action_status)
                 tracked.reason = action_state.result_description or ""

@@ -55,7 +55,7 @@ class LoggedMessage(NamedTuple):
 _Entry = tuple[int, float, str, str, bytes, str]
 
 
-@dataclass
+@dataclass(slots=True)
 class _VehicleLog:
     latest: dict[str, _Entry] = field(default_factory=dict)
     ring: deque[_Entry] = field(default_factory=lambda: deque(maxlen=RING_SIZE))

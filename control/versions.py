@@ -29,9 +29,14 @@ def wire_version(topic_major: str, known: str | None) -> str:
     return "3.0.0" if topic_major == "v3" else "2.0.0"
 
 
+# Decoded messages are of these exact types (a set lookup: isinstance with a union took
+# half a microsecond per message).
+_V3_INBOUND_TYPES = frozenset({v3.State, v3.Factsheet, v3.Connection, v3.Visualization})
+
+
 def to_model(kind: str, message: Any) -> Any:
     """An inbound message as the 2.x Struct the master works with."""
-    if isinstance(message, v3.State | v3.Factsheet | v3.Connection | v3.Visualization):
+    if type(message) in _V3_INBOUND_TYPES:
         return _INBOUND[kind](message)
     return message
 

@@ -232,17 +232,46 @@ def decode(
             NaN/Infinity/overflowing numbers, wrong types, missing required fields or
             out-of-range values.
     """
+    # Hot path (every state and visualization of the fleet): a (kind, version) pair is checked
+    # once, and an ASCII payload needs no UTF-8 decoding to be known valid.
+    try:
+        topic_kind, decoder = _PLANS[(kind, version)]
+    except (KeyError, TypeError):  # a new pair, or an unhashable kind that _plan rejects
+        topic_kind, decoder = _plan(kind, version)
+    limit = MAX_PAYLOAD_BYTES if max_payload_bytes is None else max_payload_bytes
+    if type(payload) is bytes and len(payload) <= limit and payload.isascii():
+        data: bytes | memoryview = payload
+    else:
+        data = _checked_bytes(topic_kind, payload, max_payload_bytes)
+    if decoder is None:
+        legacy: Message = _guarded(topic_kind, lambda: _decode_v1(topic_kind, data))
+        return legacy
+    try:
+        result: AnyMessage = decoder.decode(data)
+    except Exception as exc:  # incl. RecursionError; see _decode_error
+        raise _decode_error(topic_kind, exc) from None
+    return result
+
+
+# (kind, version) -> (kind, decoder; None for 1.x) for pairs `decode` checked. Versions come
+# from the wire, so it is bounded.
+_PLANS: dict[tuple[object, object], tuple[TopicKind, msgspec.json.Decoder[Any] | None]] = {}
+_PLANS_SIZE = 256
+
+
+def _plan(kind: object, version: str) -> tuple[TopicKind, msgspec.json.Decoder[Any] | None]:
+    """Check `kind` and `version` (raising :class:`DecodeError`) and remember the pair."""
     topic_kind = _kind_or_error(kind)
     major = _major_or_error(topic_kind, version)
     if topic_kind not in kinds_of(major) or (major == 1 and topic_kind is TopicKind.FACTSHEET):
         raise DecodeError(topic_kind, f"unknown topic kind for protocol version {version!r}")
-    data = _checked_bytes(topic_kind, payload, max_payload_bytes)
-    if major == 1:
-        legacy: Message = _guarded(topic_kind, lambda: _decode_v1(topic_kind, data))
-        return legacy
-    decoder = _DECODERS_V3[topic_kind] if major >= 3 else _DECODERS[topic_kind]
-    result: AnyMessage = _guarded(topic_kind, lambda: decoder.decode(data))
-    return result
+    decoders = _DECODERS_V3 if major >= 3 else _DECODERS
+    plan = (topic_kind, None if major == 1 else decoders[topic_kind])
+    if isinstance(kind, str) and type(version) is str:
+        if len(_PLANS) >= _PLANS_SIZE:
+            _PLANS.clear()  # made-up versions must not grow it without bound
+        _PLANS[(kind, version)] = plan
+    return plan
 
 
 def _decode_v1(kind: TopicKind, data: bytes | memoryview) -> Message:
@@ -256,22 +285,27 @@ def _guarded(kind: TopicKind, run: Callable[[], Any]) -> Any:
     """Run a msgspec decode/convert and turn every failure into :class:`DecodeError`."""
     try:
         return run()
-    except msgspec.ValidationError as exc:
+    except Exception as exc:
+        raise _decode_error(kind, exc) from None
+
+
+def _decode_error(kind: TopicKind, exc: Exception) -> DecodeError:
+    """The :class:`DecodeError` for a failure of msgspec's decode or convert."""
+    if isinstance(exc, msgspec.ValidationError):
         match = _PATH_RE.match(str(exc))
         if match is None:
-            raise DecodeError(kind, str(exc)) from None
-        raise DecodeError(kind, match["reason"], match["path"]) from None
-    except msgspec.DecodeError as exc:
+            return DecodeError(kind, str(exc))
+        return DecodeError(kind, match["reason"], match["path"])
+    if isinstance(exc, msgspec.DecodeError):
         # msgspec's own wording is already specific ("JSON is malformed: invalid character
         # (byte 5)", "Input data was truncated").
-        raise DecodeError(kind, str(exc)) from None
-    except RecursionError:
+        return DecodeError(kind, str(exc))
+    if isinstance(exc, RecursionError):
         # msgspec recurses per nesting level; ~1000 levels exhaust the interpreter limit.
-        raise DecodeError(kind, "JSON nested too deeply") from None
-    except Exception as exc:
-        # Last line of the trust boundary: no input may crash the caller with an
-        # exception type it does not expect (the specific cases above cover all we know).
-        raise DecodeError(kind, f"{type(exc).__name__}: {exc}") from None
+        return DecodeError(kind, "JSON nested too deeply")
+    # Last line of the trust boundary: no input may crash the caller with an exception type
+    # it does not expect (the specific cases above cover all we know).
+    return DecodeError(kind, f"{type(exc).__name__}: {exc}")
 
 
 def _kind_or_error(kind: object) -> TopicKind:

@@ -27,11 +27,33 @@ def parse_version(version: str) -> tuple[int, int, int]:
     return int(major), int(minor or 0), int(patch or 0)
 
 
+# Parsed once per distinct string: these run for every message (decode, control's 3.0 checks)
+# and a fleet speaks a handful of versions. The strings come from the wire, so the caches are
+# bounded; malformed versions are never stored (they raise each time).
+_CACHE_SIZE = 64
+_MAJORS: dict[str, int] = {}
+_MAJOR_LEVELS: dict[str, str] = {}
+
+
 def major_of(version: str) -> int:
     """Return the major version number of ``version`` (``"2.1.0"`` → ``2``)."""
-    return parse_version(version)[0]
+    major = _MAJORS.get(version) if type(version) is str else None
+    if major is None:
+        major = parse_version(version)[0]
+        if type(version) is str:
+            if len(_MAJORS) >= _CACHE_SIZE:
+                _MAJORS.clear()
+            _MAJORS[version] = major
+    return major
 
 
 def major_version_of(version: str) -> str:
     """Return the topic major-version level for ``version`` (``"2.1.0"`` → ``"v2"``)."""
-    return f"v{major_of(version)}"
+    level = _MAJOR_LEVELS.get(version) if type(version) is str else None
+    if level is None:
+        level = f"v{major_of(version)}"
+        if type(version) is str:
+            if len(_MAJOR_LEVELS) >= _CACHE_SIZE:
+                _MAJOR_LEVELS.clear()
+            _MAJOR_LEVELS[version] = level
+    return level
