@@ -90,7 +90,8 @@ class OrderDriver:
         fatal = execution.fatal_error(state)
         if fatal is not None:
             progress.append(fatal)
-        if any(p.kind == "failed" for p in progress) and state.order_id == execution.vda_order_id:
+        failed = progress and any(p.kind == "failed" for p in progress)
+        if failed and state.order_id == execution.vda_order_id:
             self.cancel(vehicle, execution)  # the vehicle keeps its order until cancelled (G.36)
         manual = execution.left_automatic(state)  # the vehicle cleared the order itself (G.37)
         if manual is not None:

@@ -17,8 +17,12 @@ NonNegativeInt: TypeAlias = Annotated[int, msgspec.Meta(ge=0)]
 ParameterValue: TypeAlias = bool | int | float | str | list[Any] | dict[str, Any]
 
 
-class VDAStruct(msgspec.Struct, rename="camel", omit_defaults=True):
+class VDAStruct(msgspec.Struct, rename="camel", omit_defaults=True, gc=False):
     """Base of every VDA 5050 Struct.
+
+    ``gc=False``: decoded messages are trees (no reference cycles), so the garbage collector
+    need not track them; with 1,000 vehicles' states alive a full collection took 120-150 ms
+    of control's main loop, and every state message added objects towards the next one.
 
     ``rename="camel"`` maps snake_case attributes to the camelCase wire names and
     ``omit_defaults=True`` drops optional fields left at ``None``, which is what keeps a

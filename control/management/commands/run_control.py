@@ -1,5 +1,6 @@
 """`manage.py run_control`: the master control process, as leader or standby."""
 
+import gc
 import signal
 from typing import Any
 
@@ -11,6 +12,8 @@ from control.health import LeaderHeartbeat, start_health_server
 from control.leader import Leadership, LeaseTimes, conninfo_from_settings
 from control.service import build_control_loop
 from control.standby import StandbyControl
+
+GC_THRESHOLD = 50_000  # allocations between young-generation collections (default 700)
 
 
 class Command(BaseCommand):
@@ -26,6 +29,11 @@ class Command(BaseCommand):
             times = LeaseTimes.from_settings(settings.CONTROL_LEASE)
             leadership = Leadership(conninfo_from_settings(database), times)
         broadcasts.start()  # browser broadcasts leave without waiting on the main loop
+        # Django, the apps and the layouts are loaded for good: keep the collector off them,
+        # and collect the young generation less often (a state message allocates dozens of
+        # objects; the default threshold ran a collection every few messages).
+        gc.freeze()
+        gc.set_threshold(GC_THRESHOLD, 20, 20)
         control = StandbyControl(leadership, build_control_loop)
         health = start_health_server(settings.CONTROL_HEALTH_PORT, control.status)
         heartbeat = LeaderHeartbeat(control.status).start()
