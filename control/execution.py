@@ -37,6 +37,8 @@ class LayoutIndex:
     edges: dict[tuple[str, str], str]  # (start node, end node) -> edge id
     speed_limits: dict[str, float] = field(default_factory=dict)  # edge id -> m/s, after zones
     parking: dict[str, str] = field(default_factory=dict)  # PARK station id -> its node id
+    # Node id -> [x, y] in centimetres as the live page gets it (filled on first use).
+    points: dict[str, list[float]] = field(default_factory=dict, compare=False, repr=False)
 
 
 class Phase(enum.StrEnum):

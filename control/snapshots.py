@@ -86,18 +86,20 @@ def browser_row(
     state, position = vehicle.state, vehicle.visual_position
     base: list[list[float]] = []
     horizon: list[list[float]] = []
-    if state is not None and position is not None and position.map_id in layouts:
-        nodes = layouts[position.map_id].nodes
+    layout = layouts.get(position.map_id) if position is not None else None
+    if state is not None and layout is not None:
         for node_state in state.node_states:
-            place = nodes.get(node_state.node_id)
-            if place is not None:
-                (base if node_state.released else horizon).append(_point(place.x, place.y))
+            point = _node_point(layout, node_state.node_id)
+            if point is not None:
+                (base if node_state.released else horizon).append(point)
     waiting_for: list[str] = []
     reserved: list[list[float]] = []
-    if traffic is not None and position is not None and position.map_id in layouts:
-        nodes = layouts[position.map_id].nodes
+    if traffic is not None and layout is not None:
         waiting_for = traffic.waiting_for(vehicle)
-        reserved = [_point(nodes[n].x, nodes[n].y) for n in traffic.reserved(vehicle) if n in nodes]
+        for node_id in traffic.reserved(vehicle):
+            point = _node_point(layout, node_id)
+            if point is not None:
+                reserved.append(point)
     footprint = vehicle_class(vehicle.factsheet)
     return {
         "id": vehicle.pk,
@@ -176,6 +178,19 @@ class LiveDeltas:
                 change["id"] = row["id"]
                 changes.append(change)
         return {"vehicles": whole, "changes": changes}
+
+
+def _node_point(layout: LayoutIndex, node_id: str) -> list[float] | None:
+    """The node's browser point, made once per layout (rows share the list; it is only
+    encoded, never changed): rounding every node of every route 5 times a second was a
+    tenth of control's broadcast work with 1,000 vehicles."""
+    point = layout.points.get(node_id)
+    if point is None:
+        place = layout.nodes.get(node_id)
+        if place is None:
+            return None
+        point = layout.points[node_id] = _point(place.x, place.y)
+    return point
 
 
 def _point(x: float, y: float) -> list[float]:

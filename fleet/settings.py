@@ -214,6 +214,9 @@ FLEET_TRAFFIC_WAIT_RECORDER = "reports.waits.record_traffic_waits"
 # control's /health and /ready (control/health.py; 0 = off). Two controls on one host (a
 # standby pair) need two ports.
 CONTROL_HEALTH_PORT = env.int("CONTROL_HEALTH_PORT", default=8081)
+# control is one long-lived process with two database threads (flush, floor observer): it keeps
+# its connections (seconds) instead of opening one per flush, as DB_CONN_MAX_AGE=0 does.
+CONTROL_DB_CONN_MAX_AGE = env.int("CONTROL_DB_CONN_MAX_AGE", default=300)
 # Leadership of a standby pair (control/leader.py LeaseTimes, seconds): renew the lease every
 # RENEW_EVERY; publish only within LEASE of the last renewal; the database ends a silent leader's
 # session after SERVER_TIMEOUT; a new leader waits GUARD; a standby polls every RETRY_EVERY; a

@@ -6,6 +6,7 @@ from typing import Any
 
 from django.conf import settings
 from django.core.management.base import BaseCommand
+from django.db import connections
 
 from control import broadcasts
 from control.health import LeaderHeartbeat, start_health_server
@@ -24,6 +25,9 @@ class Command(BaseCommand):
 
     def handle(self, *args: Any, **options: Any) -> None:
         database = settings.DATABASES["default"]
+        if database["ENGINE"] != "django.db.backends.sqlite3":
+            # Read at each connect; the web keeps its own (0) under ASGI's thread pool.
+            connections.settings["default"]["CONN_MAX_AGE"] = settings.CONTROL_DB_CONN_MAX_AGE
         leadership = None
         if database["ENGINE"] == "django.db.backends.postgresql":
             times = LeaseTimes.from_settings(settings.CONTROL_LEASE)
