@@ -49,6 +49,9 @@ class SimConfig:
     check_every: float = 10.0  # s between wait-for-cycle checks
     tick_every: float = 1.0  # s between manager ticks (re-timing, re-planning waiting vehicles)
     replan_budget: int = 2  # re-plans per tick
+    # a task is done when the vehicle passes its last goal, and the next one is planned from
+    # there (for a manager with goal_refuge: its plans go on from the goal to a refuge)
+    finish_at_goal: bool = False
 
 
 @dataclass
@@ -170,10 +173,10 @@ class Simulation:
 
     def _next_task(self, car: _Car) -> None:
         v = self.manager.vehicle(car.name)
-        node = v.route[-1]
+        node = v.route[v.passed]
         car.goals = self.tasks.next_goals(car.name, self.manager.layout.node_ids[node], self.now)
         car.assigned, car.delay = self.now, 0.0
-        car.start, car.heading = node, v.headings[-1]
+        car.start, car.heading = node, v.headings[v.passed]
         car.last_move = self.now
         if car.goals is None:
             if self.manager.layout.parking and node not in self.manager.layout.parking:
@@ -187,8 +190,9 @@ class Simulation:
         began, cpu = time.perf_counter(), time.process_time()
         try:
             plan = self.manager.plan(car.name, car.goals, self.now)
-        except NoPlanError:
+        except NoPlanError as failed:
             self.stats.plan_failures += 1
+            self._apply(failed.releases)  # vehicles sent aside on the way
             self._fallback(car)
             return
         self.stats.plan_seconds.append(time.perf_counter() - began)
@@ -198,6 +202,10 @@ class Simulation:
 
     def _fallback(self, car: _Car) -> None:
         layout, v = self.manager.layout, self.manager.vehicle(car.name)
+        if self.config.finish_at_goal and v.passed < len(v.route) - 1:
+            # the route goes on (to the refuge): drive it, plan again at its end
+            self._apply(self.manager.proceed(car.name, self.now))
+            return
         if layout.parking and v.route[-1] not in layout.parking:
             if self._park(car):
                 return
@@ -223,7 +231,10 @@ class Simulation:
 
     def _started(self, car: _Car, plan: Plan) -> None:
         self._apply(plan.releases)
-        if len(plan.nodes) == 1:  # already there
+        if self.config.finish_at_goal:
+            if self._at_goal(car):  # it stands on its goal already
+                self._goal_done(car)
+        elif len(plan.nodes) == 1:  # already there
             self._route_done(car)
 
     # -- execution ------------------------------------------------------------------------------
@@ -275,28 +286,48 @@ class Simulation:
         self.stats.release_seconds.append(time.perf_counter() - began)
         self.stats.release_cpu_seconds.append(time.process_time() - cpu)
         self._apply(releases)
+        if self.config.finish_at_goal and self._at_goal(car):
+            self._goal_done(car)
+            v = manager.vehicle(car.name)
+            if not car.moving and v.passed < len(v.route) - 1:
+                self._depart(car)
+            return
         if passed == len(v.route) - 1:
             self._route_done(car)
         elif not car.moving:
             self._depart(car)
 
+    def _at_goal(self, car: _Car) -> bool:
+        """Whether the vehicle has passed the last goal of its task on a plan for that task."""
+        v = self.manager.vehicle(car.name)
+        if not car.task_plan or car.goals is None or not v.complete or not v.goals:
+            return False
+        goal = self.manager.layout.node(car.goals[-1].node)
+        return v.goals[-1][0] == goal and v.stops[len(v.goals) - 1] <= v.passed
+
+    def _goal_done(self, car: _Car) -> None:
+        """finish_at_goal: record the task and plan the next one from the goal."""
+        self._record(car)
+        car.task_plan = False
+        self._next_task(car)
+
+    def _record(self, car: _Car) -> None:
+        """The vehicle's task is done (now, or when its handling there ends)."""
+        assert car.goals is not None
+        done = max(self.now, self.manager.vehicle(car.name).ready_at)
+        self.stats.tasks.append(
+            TaskRecord(
+                car.name, tuple(car.goals), car.assigned, done, car.start, car.heading, car.delay
+            )
+        )
+        self.tasks.finished(car.name, car.goals, done)
+        car.goals = None
+
     def _route_done(self, car: _Car) -> None:
         v = self.manager.vehicle(car.name)
-        if car.task_plan and v.complete and car.goals is not None:
-            done = max(self.now, v.ready_at)
-            self.stats.tasks.append(
-                TaskRecord(
-                    car.name,
-                    tuple(car.goals),
-                    car.assigned,
-                    done,
-                    car.start,
-                    car.heading,
-                    car.delay,
-                )
-            )
-            self.tasks.finished(car.name, car.goals, done)
-            car.goals = None
+        finished = car.task_plan and v.complete and car.goals is not None
+        if finished and not self.config.finish_at_goal:
+            self._record(car)
             self._next_task(car)
         elif car.goals is not None:
             self._try_plan(car)

@@ -22,11 +22,14 @@ vehicle queued ahead (see `traffic.reservations`), capped by the `ReleasePolicy`
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
+from dataclasses import replace
 
+from traffic.aside import Lifelong, through_traffic
 from traffic.footprint import ConflictSets, VehicleClass
 from traffic.layout import Layout
-from traffic.plans import Goal, Plan, Release, ReleasePolicy, Vehicle
+from traffic.plans import NO_HOLD, Goal, Plan, Release, ReleasePolicy, Vehicle
 from traffic.queries import FleetQueries
 from traffic.reservations import INF, Hold, ReservationTable
 from traffic.sipp import ANY_HEADING, ClassGraph, Path, heading_key, search
@@ -36,10 +39,17 @@ __all__ = ["Goal", "NoPlanError", "Plan", "Release", "ReleasePolicy", "TrafficMa
 
 
 class NoPlanError(Exception):
-    """No collision-free route to the goals exists now (try again later, or park)."""
+    """No collision-free route to the goals exists now (try again later, or park).
+
+    `releases`: base extensions made on the way (vehicles sent aside), to be sent all the same.
+    """
+
+    def __init__(self, message: str, releases: Sequence[Release] = ()) -> None:
+        super().__init__(message)
+        self.releases = tuple(releases)
 
 
-class TrafficManager(FleetQueries):
+class TrafficManager(FleetQueries, Lifelong):
     """Plans, reservations and base releases for every vehicle of one layout.
 
     The queries (`waiting_for`, `wait_cycles`, `stalled`, ...) and `block`/`restore` live in
@@ -58,6 +68,9 @@ class TrafficManager(FleetQueries):
         replan_after: float = 5.0,
         retime_slack: float = 2.0,
         quick_search: tuple[int, float] | None = None,
+        goal_refuge: bool = False,
+        step_aside: bool = False,
+        refuge_penalty: float = 0.0,
     ) -> None:
         self.layout = layout
         self.classes = tuple(classes)
@@ -73,6 +86,19 @@ class TrafficManager(FleetQueries):
         # repeated with the larger weight (near-greedy), which bounds the planning-time tail
         # in congestion at the price of a later arrival for those few plans
         self.quick_search = quick_search
+        # opt-in for lifelong task streams (`traffic.aside`): a plan visits its last goal and
+        # goes on to a refuge, its base stopping at the goal until the next plan or `proceed`
+        self.goal_refuge = goal_refuge
+        # opt-in: a plan that fails first sends vehicles standing for good on its goal or its
+        # free-flow route aside (`traffic.aside`), then is tried once more
+        self.step_aside = step_aside
+        # s a refuge on the busiest node costs (scaled by its through traffic): refuges
+        # off the main routes block fewer later plans
+        self.refuge_cost = (
+            [refuge_penalty * share for share in through_traffic(layout)]
+            if refuge_penalty > 0 and (goal_refuge or step_aside)
+            else None
+        )
         self._vehicles: list[Vehicle] = []
         self._index: dict[str, int] = {}
         self._waiters: dict[int, set[int]] = {}
@@ -133,9 +159,14 @@ class TrafficManager(FleetQueries):
             raise ValueError("partial plans take a single goal")
         targets = [(self.layout.node(g.node), g.dwell) for g in wanted]
         plan = self._plan(v, targets, now, partial)
+        moved: list[Release] = []
+        if plan is None and self.step_aside and not partial:
+            moved = self._clear_way(v, targets, now)
+            if moved:
+                plan = self._plan(v, targets, now, partial)
         if plan is None:
-            raise NoPlanError(f"no route for {vehicle_id} to {wanted[-1].node} now")
-        return plan
+            raise NoPlanError(f"no route for {vehicle_id} to {wanted[-1].node} now", moved)
+        return replace(plan, releases=(*moved, *plan.releases)) if moved else plan
 
     def replan(self, vehicle_id: str, now: float) -> Plan | None:
         """Re-plan the unreleased rest of the route to the same goals; None if kept as it was."""
@@ -158,39 +189,42 @@ class TrafficManager(FleetQueries):
         for p in nearest[:candidates]:
             if graph.to(p)[here] == INF:
                 break
-            plan = self._plan(v, [(p, 0.0)], now, False)
+            plan = self._plan(v, [(p, 0.0)], now, False, refuge=False)
             if plan is not None:
                 return plan
         raise NoPlanError(f"no free parking node reachable for {vehicle_id}")
 
     def _plan(
-        self, v: Vehicle, goals: list[tuple[int, float]], now: float, partial: bool
+        self,
+        v: Vehicle,
+        goals: list[tuple[int, float]],
+        now: float,
+        partial: bool,
+        *,
+        refuge: bool | None = None,
     ) -> Plan | None:
         if v.static:
             return None
+        refuge = self.goal_refuge if refuge is None else refuge
         graph = self.graphs[v.cls]
         b = v.base
         start = v.route[b]
         t0 = max(now, v.ready_at) if v.passed == b else now + self._remaining(v, graph)
         deadline = self.table.first_other_start(start, v.idx)
         args = (graph, self.table, v.idx, start, v.headings[b], t0, deadline, goals)
+        run = functools.partial(
+            search, *args, partial=partial, refuge=refuge, refuge_cost=self.refuge_cost
+        )
         if self.quick_search is None:
-            path = search(
-                *args, partial=partial, max_expansions=self.max_expansions, weight=self.weight
-            )
+            path = run(max_expansions=self.max_expansions, weight=self.weight)
         else:
             cap, fallback = self.quick_search
-            path = search(*args, partial=partial, max_expansions=cap, weight=self.weight)
+            path = run(max_expansions=cap, weight=self.weight)
             if path is None or not path.complete:
-                path = (
-                    search(
-                        *args, partial=partial, max_expansions=self.max_expansions, weight=fallback
-                    )
-                    or path
-                )
+                path = run(max_expansions=self.max_expansions, weight=fallback) or path
         if path is None:
             return None
-        releases = self._commit(v, path, goals, now, new=b == len(v.route) - 1)
+        releases = self._commit(v, path, goals, now, hold=refuge)
         return v.snapshot(self.layout, releases)
 
     def _remaining(self, v: Vehicle, graph: ClassGraph) -> float:
@@ -202,20 +236,32 @@ class TrafficManager(FleetQueries):
         return seconds
 
     def _commit(
-        self, v: Vehicle, path: Path, goals: list[tuple[int, float]], now: float, *, new: bool
+        self,
+        v: Vehicle,
+        path: Path,
+        goals: list[tuple[int, float]],
+        now: float,
+        *,
+        hold: bool = False,
     ) -> list[Release]:
+        """Put `path` into the table from the vehicle's decision point, then release.
+
+        A vehicle at the end of its route, or standing at the goal its base stops at, starts a
+        new route (new `plan_id`); one still driving keeps its base and gets a new horizon.
+        With `hold` the base will stop at the last goal (a refuge path, `traffic.aside`).
+        """
         b = v.base
         table, conflicts = self.table, self.conflicts
+        new = v.passed == b and (b == len(v.route) - 1 or b == v.hold_at)
+        for i in range(len(v.route) - 1, b, -1):
+            edge = v.edge_holds[i]
+            if edge is not None:
+                table.remove(edge)
+            table.remove(v.node_holds[i])
+        v.truncate(b)
         if new:
             v.restart(path.nodes[0])
             b = 0
-        else:
-            for i in range(len(v.route) - 1, b, -1):
-                edge = v.edge_holds[i]
-                if edge is not None:
-                    table.remove(edge)
-                table.remove(v.node_holds[i])
-            v.truncate(b)
         v.node_holds[b].end = path.arrive[1] if len(path.nodes) > 1 else INF
         table.ended(v.node_holds[b])
         for j in range(1, len(path.nodes)):
@@ -240,6 +286,7 @@ class TrafficManager(FleetQueries):
         stops = [b + s for s in path.stops]
         v.stops = stops + [len(v.route) + 10**9] * (len(goals) - len(stops))
         v.complete = path.complete
+        v.hold_at = stops[-1] if hold and path.complete and stops else NO_HOLD
         if b in stops[:1] and v.passed == b and not new:
             v.ready_at = max(v.ready_at, v.arrive[b] + goals[0][1])
         releases: list[Release] = []
@@ -283,7 +330,7 @@ class TrafficManager(FleetQueries):
 
     def _extend(self, v: Vehicle, now: float) -> Release | None:
         """Extend the base over the longest releasable prefix within the policy's caps."""
-        last = len(v.route) - 1
+        last = min(len(v.route) - 1, v.hold_at)
         b = start = v.base
         table, policy = self.table, self.policy
         was_blocked, v.blocked_by = v.blocked_by >= 0, -1
@@ -309,7 +356,7 @@ class TrafficManager(FleetQueries):
         if b == start:
             return None
         v.base = b
-        return Release(v.name, v.plan_id, b, last)
+        return Release(v.name, v.plan_id, b, len(v.route) - 1)
 
     def _wake(self, idx: int, now: float) -> list[Release]:
         """Re-check the vehicles that waited for vehicle `idx`."""
@@ -329,7 +376,7 @@ class TrafficManager(FleetQueries):
         Every waiting vehicle's base is re-checked first (microseconds each): a safety net so
         that a wake-up missed by the event path costs a vehicle at most one tick.
         """
-        releases: list[Release] = []
+        releases: list[Release] = self._proceed_held(now) if self.goal_refuge else []
         for v in self._vehicles:
             if v.blocked_by >= 0 and v.base == v.passed and not v.static:
                 release = self._extend(v, now)

@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 from traffic.layout import Layout
 from traffic.reservations import INF, Hold
 
+NO_HOLD = 1 << 62  # a route index no route reaches
+
 
 @dataclass(frozen=True)
 class Goal:
@@ -86,6 +88,7 @@ class Vehicle:
         self.replanned_at = -INF
         self.static = False
         self.last_progress = now
+        self.hold_at = NO_HOLD  # the base stops at this route index (goal_refuge: the last goal)
 
     def restart(self, node: int) -> None:
         """Begin a new route (a new VDA 5050 order) at `node`, where the vehicle stands."""
@@ -97,6 +100,7 @@ class Vehicle:
         if park is not None:
             park.index = 0
         self.passed = self.base = self.first_index = 0
+        self.hold_at = NO_HOLD
 
     def truncate(self, last: int) -> None:
         """Keep route indices 0..last (a new horizon follows)."""

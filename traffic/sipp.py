@@ -10,7 +10,10 @@ in that interval. A move u -> v departing at t and arriving at t + tau needs:
 Waiting is implicit (departing later within the interval), turning on the spot costs
 angle / rotation speed before departure. Goals are visited in order with a dwell time each (pick,
 drop); the last goal needs an interval that never ends, because the vehicle stays there until it
-gets its next plan. Heuristic: the exact time for the rest of the tour, turning and dwells
+gets its next plan. With `refuge` (opt-in, lifelong task streams) the last goal needs only a
+visit: the path goes on from it to the nearest node where the vehicle may stay for good (its
+refuge), so a goal someone reaches later is no reason to fail. Heuristic: the exact time for the
+rest of the tour, turning and dwells
 included, as if the vehicle were alone (reverse-Dijkstra tables over (node, heading) states).
 """
 
@@ -20,7 +23,7 @@ import heapq
 import math
 from array import array
 from collections import OrderedDict
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -105,6 +108,7 @@ class ClassGraph:
         self._reverse.sum_duplicates()
         self._tables: OrderedDict[tuple[tuple[int, float], ...], array[float]] = OrderedDict()
         self._cache = cache
+        self.zeros = array("d", [0.0]) * count  # the estimate of a refuge stage
 
     def _moves(self, node: int, key: int) -> list[tuple[int, int, float, int, float]]:
         return [
@@ -207,6 +211,9 @@ def search(
     partial: bool = False,
     max_expansions: int = 200_000,
     weight: float = 1.0,
+    refuge: bool = False,
+    avoid: Collection[int] = (),
+    refuge_cost: Sequence[float] | None = None,
 ) -> Path | None:
     """The earliest-arriving path through `goals` (node, dwell) for `vehicle`, or None.
 
@@ -214,10 +221,15 @@ def search(
     (another vehicle is queued there). With `partial`, a path that cannot reach the last goal
     ends instead at the reachable node nearest to it where the vehicle may stay. A `weight`
     above 1 inflates the heuristic (weighted A*: faster, at most that factor from the earliest
-    arrival).
+    arrival). With `refuge`, the last goal is only visited (its dwell included) and the path
+    ends at the earliest reachable node, not in `avoid`, where the vehicle may stay for good
+    (`Path.stops` then holds the goals only); `refuge_cost` (s per node) makes busy nodes worse
+    refuges: the refuge minimises arrival plus its cost.
     """
     tables = graph.tour(goals)
     last = len(goals) - 1
+    if refuge:  # the refuge stage (any node will do, no estimate), then refuges by cost
+        tables += [graph.zeros, graph.zeros]
     h_start = graph.cost_to(tables[0], start, heading)
     if h_start == INF and not partial:
         return None
@@ -226,7 +238,7 @@ def search(
 
     final = goals[-1][0]
     gaps = cache[final] = safe_intervals(final, vehicle)
-    if (not gaps or gaps[-1][1] != INF) and not partial:
+    if (not gaps or gaps[-1][1] != INF) and not partial and not refuge:
         return None  # someone stays on the last goal for good
     # A search key is one int: (stage, state, interval index); `outside` is the start when its
     # heading is no state of the graph (unknown, or no edge enters the start that way).
@@ -256,8 +268,22 @@ def search(
             u, hk, out = start, heading, graph._moves(start, heading)
         else:
             u, hk, out = node_of[s], key_of[s], moves[s]
-        if u == goals[stage][0]:
-            if stage == last:
+        if stage > last + 1:  # a refuge, popped in order of arrival plus its cost
+            found = parents[key][0]
+            return _path(graph, parents, best, found, goals, True, start, heading, refuge)
+        if stage > last:  # the refuge stage
+            if end == INF and u not in avoid:
+                cost = refuge_cost[u] if refuge_cost is not None else 0.0
+                if cost <= 0.0:
+                    return _path(graph, parents, best, key, goals, True, start, heading, refuge)
+                child = key + span * _UNIT
+                if child not in best:
+                    best[child] = t
+                    parents[child] = (key, -INF)
+                    pushes += 1
+                    push(heap, (t + cost, -t, pushes, child, end, s, stage + 1))
+        elif u == goals[stage][0]:
+            if stage == last and not refuge:
                 if end == INF:
                     return _path(graph, parents, best, key, goals, True, start, heading)
             else:
@@ -329,6 +355,7 @@ def _path(
     complete: bool,
     start: int,
     heading: int,
+    refuge: bool = False,
 ) -> Path:
     span = graph.state_count + 1
     chain: list[tuple[int, float, float]] = []
@@ -355,6 +382,6 @@ def _path(
         arrive.append(t)
         headings.append(hk)
     depart.append(INF)
-    if complete:
+    if complete and not refuge:  # (a refuge path has recorded its last goal as a dwell)
         stops.append(len(nodes) - 1)
     return Path(nodes, arrive, depart, headings, stops, complete)

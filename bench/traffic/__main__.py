@@ -21,19 +21,33 @@ def main() -> None:
         default="1000,2",
         help="S1/S3: EXPANSIONS,WEIGHT of the bounded first search, or 'off'",
     )
+    parser.add_argument(
+        "--lifelong",
+        choices=["on", "off"],
+        help="goal refuges and stepping aside (traffic.aside); default: on for S2, off otherwise",
+    )
     args = parser.parse_args()
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
         figures: dict[str, Any]
+        lifelong = args.lifelong == "on" if args.lifelong else name == "S2"
         if name == "S2":
-            figures = scenarios.s2(quick=args.quick, seed=args.seed, instances=args.instances)
+            figures = scenarios.s2(
+                quick=args.quick, seed=args.seed, instances=args.instances, lifelong=lifelong
+            )
         else:
             runner = scenarios.s1 if name == "S1" else scenarios.s3
             bound = None
             if args.quick_search != "off":
                 cap, weight = args.quick_search.split(",")
                 bound = (int(cap), float(weight))
-            figures = runner(quick=args.quick, seed=args.seed, hours=args.hours, quick_search=bound)
+            figures = runner(
+                quick=args.quick,
+                seed=args.seed,
+                hours=args.hours,
+                quick_search=bound,
+                lifelong=lifelong,
+            )
         figures["quick"] = args.quick
         print(f"== {name}")
         for key, value in figures.items():

@@ -84,8 +84,14 @@ def fleet_manager(
     max_expansions: int,
     weight: float = WEIGHT,
     quick_search: tuple[int, float] | None = None,
+    lifelong: bool = False,
+    refuge_penalty: float = 0.0,
+    replan_after: float = 5.0,
 ) -> TrafficManager:
-    """A manager with vehicles `v0..` standing at `starts` (node id, heading)."""
+    """A manager with vehicles `v0..` standing at `starts` (node id, heading).
+
+    `lifelong` turns on the opt-in goal refuges and stepping aside (`traffic.aside`).
+    """
     manager = TrafficManager(
         layout,
         [VEHICLE],
@@ -93,6 +99,10 @@ def fleet_manager(
         max_expansions=max_expansions,
         weight=weight,
         quick_search=quick_search,
+        goal_refuge=lifelong,
+        step_aside=lifelong,
+        refuge_penalty=refuge_penalty if lifelong else 0.0,
+        replan_after=replan_after,
     )
     for i, (node, heading) in enumerate(starts):
         manager.add_vehicle(f"v{i}", node, 0.0, heading=heading)

@@ -107,7 +107,13 @@ class LorrInstance:
         return self.tasks[(k * len(self.starts) + agent) % len(self.tasks)]
 
 
-BEST_KNOWN = {"MR23-I-04": 1741, "MR23-I-03": 3042, "MR23-I-05": 7432}
+BEST_KNOWN = {
+    "MR23-I-04": 1741,
+    "MR23-I-03": 3042,
+    "MR23-I-05": 7432,
+    "MR23-I-07": 5914,
+    "MR23-I-08": 6059,
+}
 
 
 def lorr(name: str) -> LorrInstance:
