@@ -66,7 +66,7 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
     """Count what paho alone receives on control's topics; time state → order update.
 
     The latency is causal: an order update answers a vehicle's state when that state reported
-    progress (a higher lastNodeSequenceId, or newBaseRequest) and the update arrives before the
+    progress (a higher lastNodeSequenceId, or newBaseRequest newly set) and arrives before the
     vehicle's next state; it is timed from that state's arrival here, so both broker hops and
     any backlog in control count. Other updates (released by another vehicle's progress, or
     by control's periodic sync) are counted apart."""
@@ -79,6 +79,7 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
     # unanswered, else None; and its last node sequence id.
     asking: dict[str, float | None] = {}
     last_node: dict[str, int] = {}
+    base_request: dict[str, bool] = {}
     latencies: list[float] = []
     other_updates = [0]
     unanswered = [0]
@@ -96,9 +97,13 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
                 return
             moved = progress.lastNodeSequenceId > last_node.get(vehicle, 0)
             last_node[vehicle] = progress.lastNodeSequenceId
+            # newBaseRequest stays set while a vehicle waits for traffic: only its rising edge
+            # asks; the update that ends such a wait answers another vehicle's progress.
+            asked_base = progress.newBaseRequest and not base_request.get(vehicle, False)
+            base_request[vehicle] = progress.newBaseRequest
             if window["on"] and asking.get(vehicle) is not None:
                 unanswered[0] += 1  # its previous request got no update before this state
-            asking[vehicle] = now if (moved or progress.newBaseRequest) else None
+            asking[vehicle] = now if (moved or asked_base) else None
         elif kind == "order":
             if window["on"]:
                 vehicle = topic[:-6]
