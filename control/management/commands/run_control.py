@@ -2,6 +2,7 @@
 
 import gc
 import signal
+import sys
 from typing import Any
 
 from django.conf import settings
@@ -15,6 +16,7 @@ from control.service import build_control_loop
 from control.standby import StandbyControl
 
 GC_THRESHOLD = 50_000  # allocations between young-generation collections (default 700)
+SWITCH_INTERVAL = 0.001  # s between forced GIL hand-overs
 
 
 class Command(BaseCommand):
@@ -38,6 +40,9 @@ class Command(BaseCommand):
         # objects; the default threshold ran a collection every few messages).
         gc.freeze()
         gc.set_threshold(GC_THRESHOLD, 20, 20)
+        # The paho thread waits for the GIL while the main loop plans or builds rows: a shorter
+        # switch interval (default 5 ms) lets it take messages off the socket sooner.
+        sys.setswitchinterval(SWITCH_INTERVAL)
         control = StandbyControl(leadership, build_control_loop)
         health = start_health_server(settings.CONTROL_HEALTH_PORT, control.status)
         heartbeat = LeaderHeartbeat(control.status).start()
