@@ -1,5 +1,5 @@
-"""The PostgreSQL path of `save_snapshots` (UPDATE … FROM jsonb_to_recordset) stores exactly what Django's
-bulk_update stores, for every snapshot field, NULLs and JSON included."""
+"""The PostgreSQL path of `save_snapshots` (UPDATE … FROM jsonb_to_recordset) stores exactly
+what Django's bulk_update stores, for every snapshot field, NULLs and JSON included."""
 
 from datetime import UTC, datetime
 from typing import Any
