@@ -70,7 +70,9 @@ class PeriodicWork:
         if link is not vehicle.last_link:  # e.g. ONLINE -> UNREACHABLE on timeout
             vehicle.last_link = link
             vehicle.mark_changed()
-        available = vehicle.is_available and vehicle.is_idle
+        # Counted once the vehicle has a registry row: a new vehicle's first snapshot goes
+        # with the next flush, and a dispatch asked for before it would find it not online.
+        available = vehicle.is_available and vehicle.is_idle and vehicle.pk is not None
         if available and not vehicle.was_available:
             batch.newly_available += 1
         vehicle.was_available = available
