@@ -31,9 +31,9 @@ def _box(x: float, y: float, half: float = 0.5) -> list[dict[str, float]]:
     return [{"x": cx, "y": cy} for cx, cy in corners]
 
 
-# Rerun: its first attempt in a full run often times out waiting for the order (passes alone
-# and on rerun; not understood yet, see docs/STATUS.md).
-@pytest.mark.flaky(reruns=3, reruns_delay=10)
+# Rerun once under heavy machine load (three processes and a web server). Its old timeouts
+# were control asking for dispatch before the new vehicle's first snapshot (docs/STATUS.md).
+@pytest.mark.flaky(reruns=1, reruns_delay=10)
 @pytest.mark.parametrize("version", ["2.1.0", "3.0.0"])
 def test_a_released_map_is_downloaded_and_enabled_and_a_3_0_vehicle_gets_the_zone_set(
     fleet_env: dict[str, str], tmp_path, live_server, version: str
