@@ -8,22 +8,13 @@ finishes, with no collision seen by the simulator's checker.
 """
 
 from collections import deque
-from dataclasses import dataclass, field
 from typing import Any
 
 import pytest
 
-import vda5050
-from control.controller import Controller
 from control.execution import LayoutIndex, NodePlace
 from control.ports import ActiveOrder
-from simulator import wire
-from simulator.collisions import Body, CollisionChecker
-from simulator.config import StartPose, VehicleConfig
-from simulator.fleet import footprint_of
-from simulator.vehicle import VirtualVehicle
-from tests.control.fakes import FakeStore
-from vda5050.enums import ConnectionState, TopicKind
+from tests.control.sim_world import SimWorld
 
 SPACING = 2.0  # m between nodes: neighbours are free of each other
 
@@ -59,59 +50,12 @@ def shortest(start: str, goal: str) -> list[str]:
     return route[::-1]
 
 
-@dataclass
-class Store(FakeStore):
-    vehicles: list[str] = field(default_factory=list)
-
-    def load_layouts(self) -> dict[str, LayoutIndex]:
-        return {"hall": LAYOUT}
-
-    def load_vehicles(self) -> list[dict[str, Any]]:
-        return [
-            {
-                "pk": i + 1,
-                "manufacturer": "sim",
-                "serial_number": serial,
-                "interface_name": "uagv",
-                "protocol_version": "2.0.0",
-            }
-            for i, serial in enumerate(self.vehicles)
-        ]
-
-
-class World:
-    """Two simulated vehicles and the controller; park jobs are opened like the flush does."""
+class World(SimWorld):
+    """Vehicles on the corridor and the controller; park jobs are opened like the flush does."""
 
     def __init__(self, starts: dict[str, str], *, park_idle: bool) -> None:
-        self.vehicles: dict[str, VirtualVehicle] = {}
-        known = {n: (p.x, p.y) for n, p in LAYOUT.nodes.items()}
-        for serial, node in starts.items():
-            place = LAYOUT.nodes[node]
-            self.vehicles[serial] = VirtualVehicle(
-                VehicleConfig(serial_number=serial, state_interval=1.0),
-                StartPose("hall", node, place.x, place.y, 0.0),
-                known_nodes=known,
-            )
-        self.serials = list(starts)
-        self.footprints = {s: footprint_of(v) for s, v in self.vehicles.items()}
-        self.checker = CollisionChecker()
-        self.controller = Controller(
-            store=Store(vehicles=self.serials),
-            interface_name="uagv",
-            publish=self.deliver,
-            traffic=True,
-            park_idle=park_idle,
-        )
-        self.controller.load()
-        self.orders: list[ActiveOrder] = []
-        self.finished: set[int] = set()
+        super().__init__(LAYOUT, starts, traffic=True, park_idle=park_idle)
         self.park_jobs: list[dict[str, Any]] = []
-        for serial, vehicle in self.vehicles.items():
-            message = wire.connection(vehicle, ConnectionState.ONLINE)
-            self.controller.handle_message(
-                self.topic(serial, "connection"), vda5050.encode(message)
-            )
-            self.publish_state(serial)
 
     def transport(self, serial: str, pickup: str, drop: str) -> None:
         vehicle = self.vehicles[serial]
@@ -128,49 +72,8 @@ class World:
             )
         )
 
-    @staticmethod
-    def topic(serial: str, kind: str) -> str:
-        return f"uagv/v2/sim/{serial}/{kind}"
-
-    def deliver(self, topic: str, payload: bytes, qos: int) -> None:
-        serial, kind = topic.split("/")[-2:]
-        vehicle = self.vehicles[serial]
-        if kind == "order":
-            vehicle.on_order(wire.decode_inbound(TopicKind.ORDER, payload, "2.0.0"))  # type: ignore[arg-type]
-        elif kind == "instantActions":
-            message = wire.decode_inbound(TopicKind.INSTANT_ACTIONS, payload, "2.0.0")
-            vehicle.on_instant_actions(message)  # type: ignore[arg-type]
-
-    def publish_state(self, serial: str) -> None:
-        for state in wire.states(self.vehicles[serial]):
-            self.controller.handle_message(self.topic(serial, "state"), vda5050.encode(state))
-
-    def run(self, seconds: float, dt: float = 0.1) -> None:
-        """Step until the transport orders finished or `seconds` of simulated time passed."""
-        for step in range(int(seconds / dt)):
-            if step % 10 == 0:
-                self.controller.sync(
-                    [o for o in self.orders if o.transport_order_id not in self.finished]
-                )
-                self.collect()
-            for serial, vehicle in self.vehicles.items():
-                vehicle.tick(dt)
-                if vehicle.take_state_due() or step % 10 == 0:
-                    self.publish_state(serial)
-            bodies = [
-                Body(s, v.x, v.y, v.theta, self.footprints[s]) for s, v in self.vehicles.items()
-            ]
-            self.checker.check(bodies, step * dt)
-            if all(
-                o.transport_order_id in self.finished for o in self.orders if o.kind == "transport"
-            ):
-                return
-
-    def collect(self) -> None:
-        batch = self.controller.collect_flush()
-        self.finished |= {p.order_id for p in batch.progress if p.kind == "finished"}
-        assert [p for p in batch.progress if p.kind in {"failed", "requeued"}] == []
-        for job in batch.job_requests:  # what control.persistence._open_job makes of it
+    def take_jobs(self, jobs: list[dict[str, Any]]) -> None:
+        for job in jobs:  # what control.persistence._open_job makes of it
             assert job["kind"] == "vehicle.park"
             self.park_jobs.append(job)
             serial = self.serials[job["vehicle"] - 1]

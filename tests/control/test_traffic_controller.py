@@ -6,23 +6,14 @@ simulated step. The same run without traffic management must collide (the check 
 """
 
 import math
-from dataclasses import dataclass, field
 from typing import Any
 
 import pytest
 
-import vda5050
-from control.controller import Controller
 from control.execution import LayoutIndex, NodePlace
 from control.ports import ActiveOrder
-from simulator import wire
-from simulator.collisions import Body, CollisionChecker
-from simulator.config import StartPose, VehicleConfig
 from simulator.delays import DelayConfig, DelayInjector
-from simulator.fleet import footprint_of
-from simulator.vehicle import VirtualVehicle
-from tests.control.fakes import FakeStore
-from vda5050.enums import ConnectionState, TopicKind
+from tests.control.sim_world import SimWorld
 
 SPACING = 2.0  # m between nodes: adjacent nodes are free of each other, the crossing is shared
 ARMS = {"W": (-1, 0), "E": (1, 0), "N": (0, 1), "S": (0, -1)}
@@ -53,26 +44,6 @@ JOBS = {
 }
 
 
-@dataclass
-class Store(FakeStore):
-    vehicles: list[str] = field(default_factory=list)
-
-    def load_layouts(self) -> dict[str, LayoutIndex]:
-        return {"cross": LAYOUT}
-
-    def load_vehicles(self) -> list[dict[str, Any]]:
-        return [
-            {
-                "pk": i + 1,
-                "manufacturer": "sim",
-                "serial_number": serial,
-                "interface_name": "uagv",
-                "protocol_version": "2.0.0",
-            }
-            for i, serial in enumerate(self.vehicles)
-        ]
-
-
 def straight(start: str, drop: str) -> list[str]:
     """The straight route between two arm nodes through C."""
     arm_a, a = start[0], int(start[1])
@@ -82,34 +53,16 @@ def straight(start: str, drop: str) -> list[str]:
     )
 
 
-class World:
-    """Simulated vehicles wired to a controller, stepped with a fixed simulated time step."""
+class World(SimWorld):
+    """The JOBS vehicles on the crossing, each with its order."""
 
     def __init__(self, serials: list[str], *, traffic: bool, delays: DelayConfig | None = None):
-        self.vehicles: dict[str, VirtualVehicle] = {}
-        for i, serial in enumerate(serials):
-            node = JOBS[serial][0]
-            place = LAYOUT.nodes[node]
-            start = StartPose("cross", node, place.x, place.y, 0.0)
-            known = {n: (p.x, p.y) for n, p in LAYOUT.nodes.items()}
-            vehicle = VirtualVehicle(
-                VehicleConfig(serial_number=serial, state_interval=1.0),
-                start,
-                known_nodes=known,
-            )
-            if delays is not None:
+        # without traffic: the whole route at once (base_ahead None)
+        starts = {serial: JOBS[serial][0] for serial in serials}
+        super().__init__(LAYOUT, starts, base_ahead=None, traffic=traffic)
+        if delays is not None:
+            for i, vehicle in enumerate(self.vehicles.values()):
                 vehicle.delays = DelayInjector(delays, stream=i)
-            self.vehicles[serial] = vehicle
-        self.footprints = {s: footprint_of(v) for s, v in self.vehicles.items()}
-        self.checker = CollisionChecker()
-        self.controller = Controller(
-            store=Store(vehicles=serials),
-            interface_name="uagv",
-            publish=self.deliver,
-            base_ahead=None,  # without traffic: the whole route at once
-            traffic=traffic,
-        )
-        self.controller.load()
         self.orders = [
             ActiveOrder(
                 transport_order_id=i + 1,
@@ -123,56 +76,6 @@ class World:
             )
             for i, s in enumerate(serials)
         ]
-        self.finished: set[int] = set()
-        for serial, vehicle in self.vehicles.items():
-            message = wire.connection(vehicle, ConnectionState.ONLINE)
-            self.controller.handle_message(
-                self.topic(serial, "connection"), vda5050.encode(message)
-            )
-            self.publish_state(serial)
-
-    @staticmethod
-    def topic(serial: str, kind: str) -> str:
-        return f"uagv/v2/sim/{serial}/{kind}"
-
-    def deliver(self, topic: str, payload: bytes, qos: int) -> None:
-        serial, kind = topic.split("/")[-2:]
-        vehicle = self.vehicles[serial]
-        if kind == "order":
-            vehicle.on_order(wire.decode_inbound(TopicKind.ORDER, payload, "2.0.0"))  # type: ignore[arg-type]
-        elif kind == "instantActions":
-            message = wire.decode_inbound(TopicKind.INSTANT_ACTIONS, payload, "2.0.0")
-            vehicle.on_instant_actions(message)  # type: ignore[arg-type]
-
-    def publish_state(self, serial: str) -> None:
-        for state in wire.states(self.vehicles[serial]):
-            self.controller.handle_message(self.topic(serial, "state"), vda5050.encode(state))
-
-    def run(self, seconds: float, dt: float = 0.1) -> None:
-        """Step until every order finished or `seconds` of simulated time passed."""
-        steps = int(seconds / dt)
-        for step in range(steps):
-            if step % 10 == 0:
-                self.controller.sync(
-                    [o for o in self.orders if o.transport_order_id not in self.finished]
-                )
-                self.collect()
-            for serial, vehicle in self.vehicles.items():
-                vehicle.tick(dt)
-                if vehicle.take_state_due() or step % 10 == 0:
-                    self.publish_state(serial)
-            self.checker.check(
-                [Body(s, v.x, v.y, v.theta, self.footprints[s]) for s, v in self.vehicles.items()],
-                step * dt,
-            )
-            if len(self.finished) == len(self.orders):
-                return
-
-    def collect(self) -> None:
-        batch = self.controller.collect_flush()
-        self.finished |= {p.order_id for p in batch.progress if p.kind == "finished"}
-        failed = [p for p in batch.progress if p.kind in {"failed", "requeued"}]
-        assert failed == []
 
 
 def test_vehicles_on_crossing_routes_all_arrive_without_collision() -> None:
