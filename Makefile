@@ -3,8 +3,9 @@ PYTHON ?= python3.11
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+NATIVE := .native-build/stamp
 
-.PHONY: bench-faults demo test lint format venv browser clean bench-ingest bench-dispatch bench-routing bench-energy bench-reports bench-traffic bench-traffic-control bench-load
+.PHONY: bench-faults demo test lint format venv native browser clean bench-ingest bench-dispatch bench-routing bench-energy bench-reports bench-traffic bench-traffic-control bench-load
 
 $(STAMP): requirements.txt requirements-dev.txt
 	@command -v $(PYTHON) >/dev/null || { echo "Python 3.11 is required ($(PYTHON) not found)"; exit 1; }
@@ -13,9 +14,18 @@ $(STAMP): requirements.txt requirements-dev.txt
 	$(PY) -m pip install --quiet -r requirements-dev.txt
 	touch $(STAMP)
 
-venv: $(STAMP)
+# The traffic planner's search loop compiled (Cython); without a compiler traffic plans in plain
+# Python (same plans, about half the speed) and the build is tried again next time.
+$(NATIVE): traffic/sipp_native.pyx build_native.py $(STAMP)
+	@mkdir -p .native-build
+	@$(PY) build_native.py >.native-build/log 2>&1 && touch $(NATIVE) \
+	  || { tail -20 .native-build/log; echo "compiled search loop not built: traffic plans in plain Python"; }
 
-demo: $(STAMP)  ## run the fleet with simulated vehicles (embedded defaults unless URLs are set)
+native: $(NATIVE)
+
+venv: $(STAMP) $(NATIVE)
+
+demo: $(STAMP) $(NATIVE)  ## run the fleet with simulated vehicles (embedded defaults unless URLs are set)
 	$(PY) manage.py run_demo $(DEMO_ARGS)
 
 # The system Chromium for page tests (Debian package; Playwright never downloads a browser).
@@ -26,7 +36,7 @@ browser:
 	      || echo "could not install chromium: browser tests will be skipped"; \
 	  else echo "chromium not installed: browser tests will be skipped"; fi; }
 
-test: $(STAMP) browser  ## the whole suite; real services when they answer (FLEET_REQUIRE_SERVICES=1 insists)
+test: $(STAMP) $(NATIVE) browser  ## the whole suite; real services when they answer (FLEET_REQUIRE_SERVICES=1 insists)
 	$(PY) -m pytest $(PYTEST_ARGS)
 
 lint: $(STAMP)
@@ -36,35 +46,35 @@ lint: $(STAMP)
 	$(VENV)/bin/mypy .
 	$(PY) manage.py makemigrations --check --dry-run
 
-bench-ingest: $(STAMP)  ## control's in-process cost per state message (bench/results/ingest.json)
+bench-ingest: $(STAMP) $(NATIVE)  ## control's in-process cost per state message (bench/results/ingest.json)
 	$(PY) -m bench.ingest $(BENCH_ARGS)
 
-bench-routing: $(STAMP)  ## LIF import of a 5,000-node site and route times (bench/results/routing.json)
+bench-routing: $(STAMP) $(NATIVE)  ## LIF import of a 5,000-node site and route times (bench/results/routing.json)
 	$(PY) -m bench.routing $(BENCH_ARGS)
 
-bench-dispatch: $(STAMP)  ## one dispatch cycle, batch assignment vs greedy (bench/results/dispatch.json)
+bench-dispatch: $(STAMP) $(NATIVE)  ## one dispatch cycle, batch assignment vs greedy (bench/results/dispatch.json)
 	$(PY) -m bench.dispatch $(BENCH_ARGS)
 
-bench-energy: $(STAMP)  ## 10 vehicles, 2 shared chargers, 8 simulated hours (bench/results/energy.json)
+bench-energy: $(STAMP) $(NATIVE)  ## 10 vehicles, 2 shared chargers, 8 simulated hours (bench/results/energy.json)
 	$(PY) -m bench.energy $(BENCH_ARGS)
 
-bench-reports: $(STAMP)  ## report pages over 30 days of 100 vehicles (bench/results/reports.json)
+bench-reports: $(STAMP) $(NATIVE)  ## report pages over 30 days of 100 vehicles (bench/results/reports.json)
 	$(PY) -m bench.reports $(BENCH_ARGS)
 
-bench-traffic-control: $(STAMP)  ## release decisions inside control, simulated vehicles (bench/results/traffic_control.json)
+bench-traffic-control: $(STAMP) $(NATIVE)  ## release decisions inside control, simulated vehicles (bench/results/traffic_control.json)
 	DJANGO_SETTINGS_MODULE=fleet.settings $(PY) -m bench.traffic_control $(BENCH_ARGS)
 
-bench-load: $(STAMP)  ## 1,000 vehicles against the real processes, 120 s (bench/results/load.json, docs/LOAD.md)
+bench-load: $(STAMP) $(NATIVE)  ## 1,000 vehicles against the real processes, 120 s (bench/results/load.json, docs/LOAD.md)
 	nice -n 5 $(PY) -m bench.load $(BENCH_ARGS)
 
-bench-faults: $(STAMP)  ## the fault suite, each row on its own services (bench/results/faults_*.json; BENCH_ARGS="broker --full")
+bench-faults: $(STAMP) $(NATIVE)  ## the fault suite, each row on its own services (bench/results/faults_*.json; BENCH_ARGS="broker --full")
 	$(PY) -m bench.faults $(BENCH_ARGS)
 
 .PHONY: bench-live-map
-bench-live-map: $(STAMP)  ## the live map with 1,000 vehicles in headless Chromium; needs REDIS_URL (bench/results/live_map.json)
+bench-live-map: $(STAMP) $(NATIVE)  ## the live map with 1,000 vehicles in headless Chromium; needs REDIS_URL (bench/results/live_map.json)
 	nice -n 5 $(PY) -m bench.live_map $(BENCH_ARGS)
 
-bench-traffic: $(STAMP)  ## SIPP + ADG traffic in simulation, S1-S3 (bench/results/traffic_s*.json)
+bench-traffic: $(STAMP) $(NATIVE)  ## SIPP + ADG traffic in simulation, S1-S3 (bench/results/traffic_s*.json)
 	$(PY) -m bench.traffic $(BENCH_ARGS)
 
 format: $(STAMP)
@@ -72,4 +82,4 @@ format: $(STAMP)
 	$(VENV)/bin/ruff check --fix .
 
 clean:
-	rm -rf $(VENV) staticfiles db.sqlite3*
+	rm -rf $(VENV) staticfiles db.sqlite3* .native-build build traffic/*.so traffic/sipp_native.cpp

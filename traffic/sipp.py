@@ -19,21 +19,27 @@ included, as if the vehicle were alone (reverse-Dijkstra tables over (node, head
 
 from __future__ import annotations
 
-import heapq
+import logging
 import math
+import os
+import pathlib
 from array import array
 from collections import OrderedDict
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from traffic import sipp_loop
 from traffic.footprint import VehicleClass
 from traffic.layout import Layout
 from traffic.reservations import ReservationTable
+from traffic.sipp_loop import SHIFT, Chain, Problem
 
+logger = logging.getLogger(__name__)
 INF = math.inf
 ANY_HEADING = -1  # a heading key that turns for free (a vehicle whose heading is unknown)
 HEADING_STEPS = 3600  # heading keys per full turn (0.1°)
@@ -224,147 +230,36 @@ def search(
     arrival). With `refuge`, the last goal is only visited (its dwell included) and the path
     ends at the earliest reachable node, not in `avoid`, where the vehicle may stay for good
     (`Path.stops` then holds the goals only); `refuge_cost` (s per node) makes busy nodes worse
-    refuges: the refuge minimises arrival plus its cost.
+    refuges: the refuge minimises arrival plus its cost. The loop runs compiled when
+    `traffic.sipp_native` is built (`make venv`), in plain Python otherwise (same result).
     """
     tables = graph.tour(goals)
-    last = len(goals) - 1
     if refuge:  # the refuge stage (any node will do, no estimate), then refuges by cost
         tables += [graph.zeros, graph.zeros]
     h_start = graph.cost_to(tables[0], start, heading)
     if h_start == INF and not partial:
         return None
-    cache: dict[int, list[tuple[float, float]]] = {}
-    safe_intervals, cost_to = table.safe_intervals, graph.cost_to
-
-    final = goals[-1][0]
-    gaps = cache[final] = safe_intervals(final, vehicle)
+    gaps = table.safe_intervals(goals[-1][0], vehicle)
     if (not gaps or gaps[-1][1] != INF) and not partial and not refuge:
         return None  # someone stays on the last goal for good
-    # A search key is one int: (stage, state, interval index); `outside` is the start when its
-    # heading is no state of the graph (unknown, or no edge enters the start that way).
-    node_of, key_of, moves = graph.node_of, graph.key_of, graph.moves
-    outside = graph.state_count
     start_state = graph.state(start, heading)
-    if start_state < 0:
-        start_state = outside
-    span = outside + 1
-    start_key = start_state << _SHIFT
-    parents: dict[int, tuple[int, float]] = {start_key: (-1, -INF)}
-    best: dict[int, float] = {start_key: t0}
-    h0 = t0 + weight * (h_start if h_start < INF else 0.0)
-    heap = [(h0, -t0, 0, start_key, deadline, start_state, 0)]
-    nearest: tuple[float, float, int] | None = None
-    pushes = expansions = 0
-    pop, push, best_get = heapq.heappop, heapq.heappush, best.get
-    while heap:
-        _, neg_t, _, key, end, s, stage = pop(heap)
-        t = -neg_t
-        if best_get(key, INF) < t:
-            continue
-        expansions += 1
-        if expansions > max_expansions:
-            break
-        if s == outside:
-            u, hk, out = start, heading, graph._moves(start, heading)
-        else:
-            u, hk, out = node_of[s], key_of[s], moves[s]
-        if stage > last + 1:  # a refuge, popped in order of arrival plus its cost
-            found = parents[key][0]
-            return _path(graph, parents, best, found, goals, True, start, heading, refuge)
-        if stage > last:  # the refuge stage
-            if end == INF and u not in avoid:
-                cost = refuge_cost[u] if refuge_cost is not None else 0.0
-                if cost <= 0.0:
-                    return _path(graph, parents, best, key, goals, True, start, heading, refuge)
-                child = key + span * _UNIT
-                if child not in best:
-                    best[child] = t
-                    parents[child] = (key, -INF)
-                    pushes += 1
-                    push(heap, (t + cost, -t, pushes, child, end, s, stage + 1))
-        elif u == goals[stage][0]:
-            if stage == last and not refuge:
-                if end == INF:
-                    return _path(graph, parents, best, key, goals, True, start, heading)
-            else:
-                t2 = t + goals[stage][1]
-                child = key + span * _UNIT
-                if t2 < end and t2 < best_get(child, INF):
-                    best[child] = t2
-                    parents[child] = (key, -INF)  # a dwell, not a move
-                    pushes += 1
-                    h = tables[stage + 1][s] if s != outside else cost_to(tables[stage + 1], u, hk)
-                    push(heap, (t2 + weight * h, -t2, pushes, child, end, s, stage + 1))
-        if partial and end == INF and stage == last:
-            score = tables[last][s] if s != outside else cost_to(tables[last], u, hk)
-            if nearest is None or (score, t) < nearest[:2]:
-                nearest = (score, t, key)
-        table_h = tables[stage]
-        base = stage * span
-        for v, seg, tau, vs_, turning in out:
-            h = table_h[vs_]
-            if h == INF and not partial:
-                continue
-            earliest = t + turning
-            latest = end - tau
-            if earliest > latest:
-                continue
-            node_gaps = cache.get(v)
-            if node_gaps is None:
-                node_gaps = cache[v] = safe_intervals(v, vehicle)
-            seg_gaps = cache.get(seg)
-            if seg_gaps is None:
-                seg_gaps = cache[seg] = safe_intervals(seg, vehicle)
-            child_base = (base + vs_) << _SHIFT
-            for ws, we in seg_gaps:
-                if ws > latest:
-                    break
-                lo = earliest if earliest > ws else ws
-                hi = latest if latest < we - tau else we - tau
-                if lo > hi:
-                    continue
-                for idx, (vs, ve) in enumerate(node_gaps):
-                    if vs > hi:
-                        break
-                    dep = lo if lo > vs else vs
-                    arrive = dep + tau
-                    if dep > hi or arrive >= ve:
-                        continue
-                    child = child_base + idx + 1
-                    if arrive < best_get(child, INF):
-                        best[child] = arrive
-                        parents[child] = (key, dep)
-                        pushes += 1
-                        f = arrive + weight * (h if h < INF else 0.0)
-                        push(heap, (f, -arrive, pushes, child, ve, vs_, stage))
-    if partial and nearest is not None and nearest[2] != start_key:
-        return _path(graph, parents, best, nearest[2], goals, False, start, heading)
-    return None
-
-
-_SHIFT = 24  # bits of the interval index in a search key
-_UNIT = 1 << _SHIFT
+    problem = Problem(
+        graph, table, vehicle, start, heading,
+        start_state if start_state >= 0 else graph.state_count,
+        t0, deadline, goals, tables, h_start, partial, max_expansions, weight, refuge,
+        avoid, refuge_cost,
+    )  # fmt: skip
+    found = LOOP.run(problem)
+    if found is None:
+        return None
+    chain, complete, to_refuge = found
+    return _path(graph, chain, complete, start, heading, to_refuge)
 
 
 def _path(
-    graph: ClassGraph,
-    parents: dict[int, tuple[int, float]],
-    best: dict[int, float],
-    key: int,
-    goals: Sequence[tuple[int, float]],
-    complete: bool,
-    start: int,
-    heading: int,
-    refuge: bool = False,
+    graph: ClassGraph, chain: Chain, complete: bool, start: int, heading: int, refuge: bool
 ) -> Path:
     span = graph.state_count + 1
-    chain: list[tuple[int, float, float]] = []
-    current = key
-    while current >= 0:
-        parent, dep = parents[current]
-        chain.append((current, best[current], dep))
-        current = parent
-    chain.reverse()
     nodes: list[int] = []
     arrive: list[float] = []
     depart: list[float] = []
@@ -374,7 +269,7 @@ def _path(
         if nodes and dep == -INF:
             stops.append(len(nodes) - 1)  # dwell at a goal on the way
             continue
-        s = (k >> _SHIFT) % span
+        s = (k >> SHIFT) % span
         u, hk = (start, heading) if s == graph.state_count else (graph.node_of[s], graph.key_of[s])
         if nodes:
             depart.append(dep)
@@ -385,3 +280,28 @@ def _path(
     if complete and not refuge:  # (a refuge path has recorded its last goal as a dwell)
         stops.append(len(nodes) - 1)
     return Path(nodes, arrive, depart, headings, stops, complete)
+
+
+def _loop() -> Any:
+    """The compiled search loop if it is built and current, else the plain-Python one.
+
+    `FLEET_TRAFFIC_PURE=1` forces the plain loop (comparisons, debugging).
+    """
+    if os.environ.get("FLEET_TRAFFIC_PURE", "") not in ("", "0"):
+        return sipp_loop
+    try:
+        from traffic import sipp_native  # type: ignore[attr-defined]
+    except ImportError:
+        logger.info("traffic: compiled search not built (make venv); searching in plain Python")
+        return sipp_loop
+    source = pathlib.Path(__file__).with_name("sipp_native.pyx")
+    if (
+        source.exists()
+        and source.stat().st_mtime > pathlib.Path(sipp_native.__file__).stat().st_mtime
+    ):
+        logger.warning("traffic: sipp_native.pyx changed since it was built; run `make native`")
+        return sipp_loop
+    return sipp_native
+
+
+LOOP = _loop()
