@@ -66,6 +66,17 @@ CLOSING = frozenset({BLOCKED, RESTRICTED})
 SOFT, STRICT = "SOFT", "STRICT"
 LIMITATIONS = {DIRECTED: ("SOFT", "RESTRICTED", "STRICT"), BIDIRECTED: ("SOFT", "RESTRICTED")}
 RELEASE_LOSS = ("STOP", "CONTINUE", "EVACUATE")
+# The zone fields (model names) that `zone_problems` checks, i.e. its keyword arguments.
+ZONE_RULE_FIELDS = (
+    "zone_type",
+    "vertices",
+    "max_speed",
+    "direction",
+    "limitation",
+    "penalty_factor",
+    "priority_factor",
+    "release_loss_behavior",
+)
 
 MIN_INSIDE = 0.01  # m of an edge inside a zone before the zone counts for it
 AGAINST = math.pi / 2 + 0.01  # rad off the one-way direction that counts as driving against it

@@ -5,7 +5,7 @@ from typing import Any
 from rest_framework import serializers
 
 from maps.models import Map, Site, Station, VehicleType, Zone
-from maps.zoning import zone_problems
+from maps.zoning import ZONE_RULE_FIELDS, zone_problems
 
 
 class StationSerializer(serializers.ModelSerializer[Station]):
@@ -116,8 +116,8 @@ class ZoneInputSerializer(serializers.Serializer[Zone]):
 
     def validate(self, attrs: dict[str, Any]) -> dict[str, Any]:
         """The rules of the zone's type, on the zone as it would be after this change."""
-        merged = {field: getattr(self.instance, field) for field in RULE_FIELDS if self.instance}
-        merged.update({k: v for k, v in attrs.items() if k in RULE_FIELDS})
+        merged = self.instance.rule_fields() if self.instance else {}
+        merged.update({k: v for k, v in attrs.items() if k in ZONE_RULE_FIELDS})
         merged = {k: ("" if v is None and k in TEXT_FIELDS else v) for k, v in merged.items()}
         errors: dict[str, list[str]] = {}
         for field, message in zone_problems(**merged):
@@ -127,14 +127,4 @@ class ZoneInputSerializer(serializers.Serializer[Zone]):
         return attrs
 
 
-RULE_FIELDS = (
-    "zone_type",
-    "vertices",
-    "max_speed",
-    "direction",
-    "limitation",
-    "penalty_factor",
-    "priority_factor",
-    "release_loss_behavior",
-)
 TEXT_FIELDS = ("limitation", "release_loss_behavior")

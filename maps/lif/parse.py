@@ -6,16 +6,27 @@ a node without `mapId`, an empty property list. Strict where the data could not 
 """
 
 import json
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import Any, TypeVar
 
 from maps.lif.checks import check_references
-from maps.lif.document import LifDocument, LifEdge, LifLayout, LifNode, LifStation, LifZone
+from maps.lif.document import (
+    EdgeProps,
+    LifDocument,
+    LifEdge,
+    LifLayout,
+    LifNode,
+    LifStation,
+    LifZone,
+    NodeProps,
+)
 from maps.lif.properties import read_edge_props, read_node_props
 from maps.lif.reader import Reader, show
 from maps.lif.report import ImportReport
 from maps.models import Station, Zone
-from maps.zoning import zone_problems
+from maps.zoning import ZONE_RULE_FIELDS, zone_problems
+
+Props = TypeVar("Props", NodeProps, EdgeProps)
 
 EXTENSION = "openFleet"  # our own fields that LIF lacks (station kind, limits for every vehicle,
 # a layout's zones)
@@ -220,22 +231,12 @@ def _zone(reader: Reader, raw: Any, path: str) -> LifZone | None:
         vehicle_types=reader.strings(data, "vehicleTypeIds", path) or [],
     )
     if zone_type:
-        rule_fields = {k: v for k, v in fields.items() if k in RULE_FIELDS}
+        rule_fields = {k: v for k, v in fields.items() if k in ZONE_RULE_FIELDS}
         for field, message in zone_problems(**rule_fields):
             reader.report.error(f"{path}.{ZONE_NAMES.get(field, field)}", message)
     return zone
 
 
-RULE_FIELDS = (
-    "zone_type",
-    "vertices",
-    "max_speed",
-    "direction",
-    "limitation",
-    "penalty_factor",
-    "priority_factor",
-    "release_loss_behavior",
-)
 ZONE_NAMES = {
     "vertices": "vertices",
     "max_speed": "maximumSpeed",
@@ -266,13 +267,9 @@ def _node(reader: Reader, raw: Any, path: str, layout: str) -> LifNode | None:
         name=reader.string(data, "nodeName", path),
         description=reader.string(data, "nodeDescription", path),
     )
-    props = reader.array(data, "vehicleTypeNodeProperties", path, required=True)
-    if props == []:
-        reader.report.warn(f"{path}.vehicleTypeNodeProperties", "empty: open to every vehicle")
-    for i, item in enumerate(props or []):
-        prop = read_node_props(reader, item, f"{path}.vehicleTypeNodeProperties[{i}]")
-        if prop is not None:
-            node.props.append(prop)
+    node.props = _vehicle_type_props(
+        reader, data, path, "vehicleTypeNodeProperties", read_node_props
+    )
     extension = _extension(reader, data, path, ("theta",))
     node.theta = reader.number(extension, "theta", f"{path}.{EXTENSION}")
     return node
@@ -292,16 +289,30 @@ def _edge(reader: Reader, raw: Any, path: str, layout: str) -> LifEdge | None:
         name=reader.string(data, "edgeName", path),
         description=reader.string(data, "edgeDescription", path),
     )
-    props = reader.array(data, "vehicleTypeEdgeProperties", path, required=True)
-    if props == []:
-        reader.report.warn(f"{path}.vehicleTypeEdgeProperties", "empty: open to every vehicle")
-    for i, item in enumerate(props or []):
-        prop = read_edge_props(reader, item, f"{path}.vehicleTypeEdgeProperties[{i}]")
-        if prop is not None:
-            edge.props.append(prop)
+    edge.props = _vehicle_type_props(
+        reader, data, path, "vehicleTypeEdgeProperties", read_edge_props
+    )
     extension = _extension(reader, data, path, ("maxSpeed",))
     edge.max_speed = reader.number(extension, "maxSpeed", f"{path}.{EXTENSION}", positive=True)
     return edge
+
+
+def _vehicle_type_props(
+    reader: Reader,
+    data: dict[str, Any],
+    path: str,
+    key: str,
+    read: Callable[[Reader, Any, str], Props | None],
+) -> list[Props]:
+    """The vehicle-type properties of a node or edge, each read by `read`.
+
+    The list is required; an empty one is allowed (the element is open to every vehicle).
+    """
+    items = reader.array(data, key, path, required=True)
+    if items == []:
+        reader.report.warn(f"{path}.{key}", "empty: open to every vehicle")
+    props = (read(reader, item, f"{path}.{key}[{i}]") for i, item in enumerate(items or []))
+    return [prop for prop in props if prop is not None]
 
 
 def _station(reader: Reader, raw: Any, path: str, layout: str) -> LifStation | None:

@@ -108,13 +108,4 @@ class Zone(models.Model):
 
     def rule_fields(self) -> dict[str, Any]:
         """The fields `maps.zoning.zone_problems` checks."""
-        return {
-            "zone_type": self.zone_type,
-            "vertices": self.vertices,
-            "max_speed": self.max_speed,
-            "direction": self.direction,
-            "limitation": self.limitation,
-            "penalty_factor": self.penalty_factor,
-            "priority_factor": self.priority_factor,
-            "release_loss_behavior": self.release_loss_behavior,
-        }
+        return {field: getattr(self, field) for field in zoning.ZONE_RULE_FIELDS}

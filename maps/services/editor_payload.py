@@ -12,12 +12,14 @@ The payload is the whole layout of one map, in the shape `maps.selectors.editor_
 Paths are JSONPath-like ("$.edges[4].end"), as in LIF import reports.
 """
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 from maps.models import Station, VehicleType, Zone
-from maps.zoning import zone_problems
+from maps.services.payload_fields import FieldReader, Problem, show_value
+from maps.zoning import ZONE_RULE_FIELDS, zone_problems
+
+__all__ = ["Draft", "PayloadReader", "Problem", "read_payload"]
 
 MAX_ID = 100
 MAX_NAME = 200
@@ -45,17 +47,6 @@ FLOOR_PLAN_KEYS = {
     "originY": "floor_plan_origin_y",
     "rotation": "floor_plan_rotation",
 }
-
-
-@dataclass(frozen=True)
-class Problem:
-    """One problem of a payload: where (JSONPath-like) and what."""
-
-    path: str
-    message: str
-
-    def as_dict(self) -> dict[str, str]:
-        return {"path": self.path, "message": self.message}
 
 
 @dataclass
@@ -93,11 +84,11 @@ class Draft:
         }
 
 
-class PayloadReader:
+class PayloadReader(FieldReader):
     """Reads a payload into a Draft, collecting every problem instead of stopping at the first."""
 
     def __init__(self) -> None:
-        self.problems: list[Problem] = []
+        super().__init__()
         self.draft = Draft()
 
     def read(self, payload: Any) -> Draft:
@@ -199,7 +190,7 @@ class PayloadReader:
         zone_id = self._id(data, path, "zones")
         zone_type = data.get("type")
         if zone_type not in Zone.Type.values:
-            self._problem(f"{path}.type", f"unknown zone type {_show(zone_type)}")
+            self._problem(f"{path}.type", f"unknown zone type {show_value(zone_type)}")
         spec: dict[str, Any] = {
             "zone_type": zone_type,
             "vertices": data.get("vertices"),
@@ -219,7 +210,7 @@ class PayloadReader:
         for key in ("entryActions", "duringActions", "exitActions"):
             spec[ZONE_KEYS[key]] = self._actions(data, key, path)
         if zone_type in Zone.Type.values:
-            rule_fields = {k: spec[k] for k in _RULE_FIELDS}
+            rule_fields = {k: spec[k] for k in ZONE_RULE_FIELDS}
             for model_field, message in zone_problems(**rule_fields):
                 self._problem(f"{path}.{ZONE_PATHS[model_field]}", message)
         if zone_id is not None:
@@ -235,7 +226,7 @@ class PayloadReader:
             path = self.draft.path("edges", edge_id)
             for end in ("start", "end"):
                 if spec[end] not in nodes:
-                    self._problem(f"{path}.{end}", f"unknown node {_show(spec[end])}")
+                    self._problem(f"{path}.{end}", f"unknown node {show_value(spec[end])}")
             pair = (spec["start"], spec["end"])
             if pair in pairs:
                 self._problem(path, f"edge {pairs[pair]} already runs from {pair[0]} to {pair[1]}")
@@ -244,7 +235,7 @@ class PayloadReader:
             path = self.draft.path("stations", station_id)
             for i, node_id in enumerate(spec["nodes"]):
                 if node_id not in nodes:
-                    self._problem(f"{path}.nodes[{i}]", f"unknown node {_show(node_id)}")
+                    self._problem(f"{path}.nodes[{i}]", f"unknown node {show_value(node_id)}")
 
     def _check_station_nodes(self, nodes: list[str], path: str) -> None:
         seen: set[str] = set()
@@ -261,7 +252,9 @@ class PayloadReader:
         known = set(VehicleType.objects.filter(type_id__in=names).values_list("type_id", flat=True))
         for i, name in enumerate(names):
             if name not in known:
-                self._problem(f"{path}.vehicleTypes[{i}]", f"unknown vehicle type {_show(name)}")
+                self._problem(
+                    f"{path}.vehicleTypes[{i}]", f"unknown vehicle type {show_value(name)}"
+                )
         return [n for n in names if n in known]
 
     def _actions(self, data: dict[str, Any], key: str, path: str) -> list[dict[str, Any]]:
@@ -305,94 +298,8 @@ class PayloadReader:
             return None
         return value
 
-    def _number(
-        self,
-        data: dict[str, Any],
-        key: str,
-        path: str,
-        *,
-        required: bool = False,
-        positive: bool = False,
-        unit: bool = False,
-    ) -> float | None:
-        value = data.get(key)
-        if value is None:
-            if required:
-                self._problem(f"{path}.{key}", "missing")
-            return None
-        if (
-            isinstance(value, bool)
-            or not isinstance(value, int | float)
-            or not math.isfinite(value)
-        ):
-            self._problem(f"{path}.{key}", f"must be a number, not {_show(value)}")
-            return None
-        if positive and value <= 0:
-            self._problem(f"{path}.{key}", "must be above 0")
-            return None
-        if unit and not 0 <= value <= 1:
-            self._problem(f"{path}.{key}", "must be from 0 to 1")
-            return None
-        return float(value)
-
-    def _text(self, data: dict[str, Any], key: str, path: str, max_length: int) -> str:
-        value = data.get(key)
-        if value is None:
-            return ""
-        if not isinstance(value, str):
-            self._problem(f"{path}.{key}", "must be text")
-            return ""
-        if len(value) > max_length:
-            self._problem(f"{path}.{key}", f"longer than {max_length} characters")
-        return value[:max_length]
-
-    def _flag(self, data: dict[str, Any], key: str, path: str, *, default: bool) -> bool:
-        value = data.get(key, default)
-        if not isinstance(value, bool):
-            self._problem(f"{path}.{key}", "must be true or false")
-            return default
-        return value
-
-    def _choice(self, data: dict[str, Any], key: str, path: str, choices: list[str]) -> str:
-        value = data.get(key) or ""
-        if value and value not in choices:
-            self._problem(f"{path}.{key}", f"must be one of {', '.join(choices)}")
-            return ""
-        return str(value)
-
-    def _object(self, value: Any, path: str) -> dict[str, Any] | None:
-        if not isinstance(value, dict):
-            self._problem(path, "must be an object")
-            return None
-        return value
-
-    def _list(self, data: dict[str, Any], key: str, path: str) -> list[Any]:
-        value = data.get(key)
-        if not isinstance(value, list):
-            self._problem(f"{path}.{key}", "missing" if value is None else "must be a list")
-            return []
-        return value
-
-    def _known(self, data: dict[str, Any], path: str, keys: set[str]) -> None:
-        for key in data:
-            if key not in keys:
-                self._problem(f"{path}.{key}", "unknown field")
-
-    def _problem(self, path: str, message: str) -> None:
-        self.problems.append(Problem(path, message))
-
 
 LISTS = ("nodes", "edges", "stations", "zones")
-_RULE_FIELDS = (
-    "zone_type",
-    "vertices",
-    "max_speed",
-    "direction",
-    "limitation",
-    "penalty_factor",
-    "priority_factor",
-    "release_loss_behavior",
-)
 
 
 def read_payload(payload: Any) -> tuple[Draft, list[Problem]]:
@@ -401,8 +308,3 @@ def read_payload(payload: Any) -> tuple[Draft, list[Problem]]:
     draft = reader.read(payload)
     reader.check_references()
     return draft, reader.problems
-
-
-def _show(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
