@@ -16,7 +16,7 @@ $(STAMP): requirements.txt requirements-dev.txt
 
 # The traffic planner's search loop compiled (Cython); without a compiler traffic plans in plain
 # Python (same plans, about half the speed) and the build is tried again next time.
-$(NATIVE): traffic/sipp_native.pyx build_native.py $(STAMP)
+$(NATIVE): traffic/_holds.pyx traffic/_holds.pxd traffic/_search.pyx build_native.py $(STAMP)
 	@mkdir -p .native-build
 	@$(PY) build_native.py >.native-build/log 2>&1 && touch $(NATIVE) \
 	  || { tail -20 .native-build/log; echo "compiled search loop not built: traffic plans in plain Python"; }
@@ -82,4 +82,4 @@ format: $(STAMP)
 	$(VENV)/bin/ruff check --fix .
 
 clean:
-	rm -rf $(VENV) staticfiles db.sqlite3* .native-build build traffic/*.so traffic/sipp_native.cpp
+	rm -rf $(VENV) staticfiles db.sqlite3* .native-build build traffic/*.so traffic/_holds.cpp traffic/_search.cpp

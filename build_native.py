@@ -1,7 +1,7 @@
-"""Compile the traffic planner's search loop (`traffic/sipp_native.pyx`) with Cython.
+"""Compile the traffic planner's hot parts (`traffic/_holds.pyx`, `traffic/_search.pyx`).
 
 Run by `make venv` and `make native`. Optional: without a C++ compiler the build fails with a
-message and `traffic` runs the same search in plain Python (`traffic/sipp_loop.py`), slower.
+message and `traffic` makes the same plans in plain Python, slower (`traffic/speedups.py`).
 """
 
 import sys
@@ -9,7 +9,10 @@ import sys
 from Cython.Build import cythonize
 from setuptools import Distribution, Extension
 
-EXTENSIONS = [Extension("traffic.sipp_native", ["traffic/sipp_native.pyx"], language="c++")]
+EXTENSIONS = [
+    Extension(f"traffic.{name}", [f"traffic/{name}.pyx"], language="c++")
+    for name in ("_holds", "_search")
+]
 
 
 def main() -> int:

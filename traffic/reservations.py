@@ -21,12 +21,18 @@ from __future__ import annotations
 import bisect
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+from traffic import speedups
 
 INF = math.inf
 
 
-class Hold:
-    """One vehicle's claim on one resource during one step of its plan."""
+class PyHold:
+    """One vehicle's claim on one resource during one step of its plan.
+
+    `Hold` is this class, or its twin compiled as a C struct (`traffic._speedups.Hold`).
+    """
 
     __slots__ = ("vehicle", "resource", "index", "start", "end", "key", "released", "conflicts")
 
@@ -54,6 +60,12 @@ class Hold:
             f"Hold(v{self.vehicle} r{self.resource} #{self.index} "
             f"{self.start:.2f}-{self.end:.2f} {state})"
         )
+
+
+if TYPE_CHECKING:
+    Hold = PyHold
+else:
+    Hold = speedups.COMPILED.Hold if speedups.COMPILED else PyHold
 
 
 def _key(hold: Hold) -> float:

@@ -19,10 +19,7 @@ included, as if the vehicle were alone (reverse-Dijkstra tables over (node, head
 
 from __future__ import annotations
 
-import logging
 import math
-import os
-import pathlib
 from array import array
 from collections import OrderedDict
 from collections.abc import Collection, Sequence
@@ -33,13 +30,12 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from traffic import sipp_loop
+from traffic import sipp_loop, speedups
 from traffic.footprint import VehicleClass
 from traffic.layout import Layout
 from traffic.reservations import ReservationTable
 from traffic.sipp_loop import SHIFT, Chain, Problem
 
-logger = logging.getLogger(__name__)
 INF = math.inf
 ANY_HEADING = -1  # a heading key that turns for free (a vehicle whose heading is unknown)
 HEADING_STEPS = 3600  # heading keys per full turn (0.1°)
@@ -231,7 +227,7 @@ def search(
     ends at the earliest reachable node, not in `avoid`, where the vehicle may stay for good
     (`Path.stops` then holds the goals only); `refuge_cost` (s per node) makes busy nodes worse
     refuges: the refuge minimises arrival plus its cost. The loop runs compiled when
-    `traffic.sipp_native` is built (`make venv`), in plain Python otherwise (same result).
+    `traffic._speedups` is built (`make venv`), in plain Python otherwise (same result).
     """
     tables = graph.tour(goals)
     if refuge:  # the refuge stage (any node will do, no estimate), then refuges by cost
@@ -282,26 +278,4 @@ def _path(
     return Path(nodes, arrive, depart, headings, stops, complete)
 
 
-def _loop() -> Any:
-    """The compiled search loop if it is built and current, else the plain-Python one.
-
-    `FLEET_TRAFFIC_PURE=1` forces the plain loop (comparisons, debugging).
-    """
-    if os.environ.get("FLEET_TRAFFIC_PURE", "") not in ("", "0"):
-        return sipp_loop
-    try:
-        from traffic import sipp_native  # type: ignore[attr-defined]
-    except ImportError:
-        logger.info("traffic: compiled search not built (make venv); searching in plain Python")
-        return sipp_loop
-    source = pathlib.Path(__file__).with_name("sipp_native.pyx")
-    if (
-        source.exists()
-        and source.stat().st_mtime > pathlib.Path(sipp_native.__file__).stat().st_mtime
-    ):
-        logger.warning("traffic: sipp_native.pyx changed since it was built; run `make native`")
-        return sipp_loop
-    return sipp_native
-
-
-LOOP = _loop()
+LOOP: Any = speedups.COMPILED or sipp_loop  # the search loop: compiled when built

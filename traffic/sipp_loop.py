@@ -1,9 +1,9 @@
 """The SIPP search loop in plain Python: the reference, and the fallback when the compiled loop
-(`traffic/sipp_native.pyx`, built by `make venv`) is missing or stale.
+(`traffic/_speedups.pyx`, built by `make venv`) is missing or stale.
 
 Both take the same `Problem` and return the same answer, expansion for expansion (the heap
 order is (f, -arrival, push count), a total order, so any heap pops the same sequence);
-`tests/traffic/test_sipp_native.py` compares them on random problems.
+`tests/traffic/test_speedups.py` compares them on random problems.
 """
 
 from __future__ import annotations

@@ -19,6 +19,7 @@ from __future__ import annotations
 import heapq
 from collections.abc import Sequence
 
+from traffic import speedups
 from traffic.plans import Vehicle
 from traffic.reservations import Hold, ReservationTable
 from traffic.sipp import ClassGraph
@@ -51,7 +52,7 @@ def lower_bounds(
     return (earliest + slack, p) if earliest > v.depart[p] + slack else None
 
 
-def propagate(
+def propagate_plain(
     vehicles: Sequence[Vehicle],
     table: ReservationTable,
     graphs: Sequence[ClassGraph],
@@ -59,7 +60,7 @@ def propagate(
 ) -> int:
     """Apply pushes (time, vehicle, index: no departure from that index before time).
 
-    Returns the number of steps moved.
+    Returns the number of steps moved. (`propagate` is this or its compiled twin.)
     """
     heap = list(pushes)
     heapq.heapify(heap)
@@ -114,6 +115,9 @@ def _push_followers(
             break
         if follower.vehicle != idx and not follower.released and follower.start < end:
             heapq.heappush(heap, (end, follower.vehicle, follower.index - 1))
+
+
+propagate = speedups.COMPILED.propagate if speedups.COMPILED else propagate_plain
 
 
 def find_cycles(graph: dict[str, list[str]]) -> list[list[str]]:

@@ -1,6 +1,9 @@
-"""The compiled search loop (`traffic.sipp_native`) finds exactly what the plain loop finds."""
+"""The compiled planner parts (`traffic._speedups`) give exactly what their plain twins give."""
 
+import json
 import os
+import subprocess
+import sys
 from types import SimpleNamespace
 from typing import Any
 
@@ -8,17 +11,13 @@ import pytest
 
 from tests.traffic.helpers import ListTasks, cells, manager
 from tests.traffic.test_planning_speed import busy_grid
-from traffic import sipp, sipp_loop
+from traffic import reservations, sipp, sipp_loop, speedups
 from traffic.des import SimConfig, Simulation
 from traffic.layout import Layout
 from traffic.plans import Goal
 
-try:
-    from traffic import sipp_native  # type: ignore[attr-defined]
-except ImportError:  # not built: `make venv` builds it (build_native.py)
-    sipp_native = None
-
-needs_native = pytest.mark.skipif(sipp_native is None, reason="compiled search loop not built")
+native = speedups.COMPILED  # None when not built (`make venv` builds it) or FLEET_TRAFFIC_PURE
+needs_native = pytest.mark.skipif(native is None, reason="compiled planner parts not loaded")
 
 
 class BothLoops:
@@ -29,7 +28,7 @@ class BothLoops:
 
     def run(self, problem: Any) -> Any:
         plain = sipp_loop.run(problem)
-        compiled = sipp_native.run(problem)
+        compiled = native.run(problem)  # type: ignore[union-attr]
         assert compiled == plain, (problem.start, problem.goals, problem.partial, problem.refuge)
         if plain is None:
             self.failed += 1
@@ -114,5 +113,35 @@ def test_a_start_with_an_unknown_heading_and_a_blocked_goal_search_the_same(
 
 @pytest.mark.skipif(os.environ.get("CI") != "true", reason="CI builds the compiled loop")
 def test_ci_searches_with_the_compiled_loop() -> None:
-    assert sipp_native is not None, "build_native.py did not build traffic.sipp_native"
-    assert sipp.LOOP is sipp_native
+    assert native is not None, "build_native.py did not build traffic._speedups"
+    assert sipp.LOOP is native
+    assert reservations.Hold is native.Hold
+
+
+RUN = """
+import json
+from tests.traffic.test_planning_speed import busy_grid
+from traffic import speedups
+m, sim, tasks = busy_grid()
+stats = sim.run(400.0)
+plans = {v.name: (v.route, v.arrive, v.depart) for v in m._vehicles}
+holds = sorted(repr(h) for queue in m.table.blocked for h in queue)
+outcome = [repr(stats.tasks), stats.collisions, stats.wait_cycles, stats.stalls, stats.moves,
+           stats.delays, stats.waits]
+print(json.dumps([speedups.COMPILED is not None, outcome, tasks.done, plans, holds]))
+"""
+
+
+@needs_native
+def test_a_delayed_run_retimes_and_holds_the_same_compiled_and_plain() -> None:
+    def run(pure: str) -> list[Any]:
+        env = os.environ | {"FLEET_TRAFFIC_PURE": pure}
+        out = subprocess.run(
+            [sys.executable, "-c", RUN], env=env, capture_output=True, text=True, check=True
+        )
+        result: list[Any] = json.loads(out.stdout)
+        return result
+
+    compiled, plain = run("0"), run("1")
+    assert (compiled[0], plain[0]) == (True, False)
+    assert compiled[1:] == plain[1:]

@@ -2,11 +2,10 @@
 # distutils: language = c++
 """The SIPP search loop compiled (Cython, C++ containers): `traffic.sipp_loop.run`, same answer.
 
-Built by `make venv` (`build_native.py`); `traffic.sipp` falls back to the plain-Python loop
-when this module is missing or older than its source. States, moves and heuristic tables are
-read from flat arrays, the open list is a binary heap of structs ordered like the Python
-tuples (f, -arrival, push count), and safe intervals are fetched from the reservation table
-once per resource and search, as in the Python loop.
+States, moves and heuristic tables are read from flat arrays, the open list is a binary heap
+of structs ordered like the Python tuples (f, -arrival, push count), and safe intervals are
+computed from the reservation lists once per resource and search, as
+`ReservationTable._between` does. `traffic.speedups` loads it when built and current.
 """
 
 from libcpp.unordered_map cimport unordered_map
@@ -14,6 +13,8 @@ from libcpp.utility cimport pair
 from libcpp.vector cimport vector
 
 import numpy as np
+
+from traffic._holds cimport Hold
 
 ctypedef pair[long long, double] Link  # parent key, departure (-inf: a dwell)
 
@@ -129,17 +130,16 @@ cdef class Gaps:
             self.table.sort(resource)
         cdef vector[double]* flat = &self.cache[resource]
         cdef double free_from = -INF
-        cdef double key, end
-        for hold in <list>self.blocked[resource]:
-            if <long long>hold.vehicle == self.vehicle:
+        cdef Hold hold
+        for item in <list>self.blocked[resource]:
+            hold = <Hold?>item
+            if hold.vehicle == self.vehicle:
                 continue
-            key = hold.key
-            if key > free_from:
+            if hold.key > free_from:
                 flat.push_back(free_from)
-                flat.push_back(key)
-            end = hold.end
-            if end > free_from:
-                free_from = end
+                flat.push_back(hold.key)
+            if hold.end > free_from:
+                free_from = hold.end
         if free_from < INF:
             flat.push_back(free_from)
             flat.push_back(INF)
