@@ -23,10 +23,10 @@ from __future__ import annotations
 
 import random
 
-from traffic.footprint import ConflictSets
+from traffic.execution import Execution
 from traffic.layout import Layout
 from traffic.plans import NO_HOLD, Release, Vehicle
-from traffic.reservations import INF, ReservationTable
+from traffic.reservations import INF
 from traffic.sipp import ClassGraph, Path, search
 
 ASIDE_LIMIT = 4  # vehicles sent aside for one failed plan
@@ -66,25 +66,12 @@ def through_traffic(layout: Layout, *, seed: int = 0) -> list[float]:
     return [t / busiest for t in total]
 
 
-class Lifelong:
-    """`proceed`, the goal-hold safety net and stepping aside (a `TrafficManager` mixin)."""
+class Lifelong(Execution):
+    """`proceed`, the goal-hold safety net and stepping aside (a `TrafficManager` base class)."""
 
-    layout: Layout
-    table: ReservationTable
-    conflicts: ConflictSets
     graphs: list[ClassGraph]
     replan_after: float
     refuge_cost: list[float] | None
-    _vehicles: list[Vehicle]
-
-    def vehicle(self, vehicle_id: str) -> Vehicle:  # pragma: no cover (the manager's)
-        raise NotImplementedError
-
-    def _extend(self, v: Vehicle, now: float) -> Release | None:  # pragma: no cover
-        raise NotImplementedError
-
-    def _wake(self, idx: int, now: float) -> list[Release]:  # pragma: no cover
-        raise NotImplementedError
 
     def _commit(  # pragma: no cover (the manager's)
         self,

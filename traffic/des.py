@@ -6,7 +6,8 @@ vehicle ends its route it gets its next task from a `Tasks` source. Independentl
 manager's bookkeeping the executor tracks what each vehicle physically occupies (its node, and
 while moving the segment and the next node) and counts a collision whenever a vehicle starts a
 move into resources that conflict with another vehicle's. It also counts wait-for cycles and
-stalls (a vehicle with work left that has not moved for `stall_after` seconds).
+stalls (a vehicle with work left that has not moved for `stall_after` seconds; see
+`traffic.des_watch`). What a run is given and measures is in `traffic.des_records`.
 """
 
 from __future__ import annotations
@@ -15,9 +16,9 @@ import heapq
 import random
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import Protocol
 
+from traffic.des_records import SimConfig, SimStats, TaskRecord, Tasks
+from traffic.des_watch import StallWatch
 from traffic.manager import NoPlanError, TrafficManager
 from traffic.plans import Goal, Plan, Release
 from traffic.reservations import INF, ReservationTable
@@ -26,71 +27,9 @@ from traffic.sipp import ClassGraph, search
 MOVE, RETRY, CHECK = 0, 1, 2
 
 
-class Tasks(Protocol):
-    """Where vehicles go next."""
-
-    def next_goals(self, vehicle_id: str, node: str, now: float) -> list[Goal] | None:
-        """The next task's goals for a vehicle standing at `node`, or None for no task."""
-
-    def finished(self, vehicle_id: str, goals: Sequence[Goal], now: float) -> None:
-        """The vehicle completed the task with `goals`."""
-
-
-@dataclass
-class SimConfig:
-    """Disturbances, fallbacks and safety-net thresholds of a run."""
-
-    delay_probability: float = 0.05
-    delay_range: tuple[float, float] = (5.0, 30.0)
-    seed: int = 0
-    retry_after: float = 1.0  # s until a vehicle without a plan tries again
-    partial: bool = False  # on failure, drive towards the goal as far as possible
-    stall_after: float = 300.0  # s without progress while work is left
-    check_every: float = 10.0  # s between wait-for-cycle checks
-    tick_every: float = 1.0  # s between manager ticks (re-timing, re-planning waiting vehicles)
-    replan_budget: int = 2  # re-plans per tick
-    # a task is done when the vehicle passes its last goal, and the next one is planned from
-    # there (for a manager with goal_refuge: its plans go on from the goal to a refuge)
-    finish_at_goal: bool = False
-
-
-@dataclass
-class TaskRecord:
-    """One completed task."""
-
-    vehicle_id: str
-    goals: tuple[Goal, ...]
-    assigned: float
-    done: float
-    start: int  # node index where it was assigned
-    heading: int
-    delay: float  # injected delay while executing it
-
-
-@dataclass
-class SimStats:
-    """What a run measured."""
-
-    tasks: list[TaskRecord] = field(default_factory=list)
-    collisions: int = 0
-    wait_cycles: int = 0
-    stalls: int = 0  # no progress for stall_after s, and neither the vehicle it waits for
-    long_waits: int = 0  # no progress for stall_after s behind a vehicle that is driving
-    stall_chains: list[str] = field(default_factory=list)  # per stall: its wait-for chain
-    plan_failures: int = 0
-    moves: int = 0
-    delays: int = 0
-    waits: list[float] = field(default_factory=list)  # seconds stopped at decision points
-    plan_seconds: list[float] = field(default_factory=list)  # wall time per successful plan call
-    release_seconds: list[float] = field(default_factory=list)  # wall time per progress event
-    # the same in process CPU time: on a shared, loaded machine wall time also counts waiting
-    # for a core, which says more about the neighbours than about the algorithm
-    plan_cpu_seconds: list[float] = field(default_factory=list)
-    release_cpu_seconds: list[float] = field(default_factory=list)
-    replan_cpu_seconds: list[float] = field(default_factory=list)  # per tick() call
-
-
 class _Car:
+    """One simulated vehicle: what it physically does and which task it serves."""
+
     __slots__ = (
         "name",
         "idx",
@@ -136,6 +75,7 @@ class Simulation:
         ]
         self._by_name = {c.name: c for c in self._cars}
         self._occupant: dict[int, set[int]] = {}
+        self._watch = StallWatch(manager, self._cars, self.stats, config.stall_after)
         for car in self._cars:
             node = manager.vehicle(car.name).route[-1]
             self._occupy(car, (node,))
@@ -154,13 +94,10 @@ class Simulation:
             elif kind == RETRY:
                 self._try_plan(self._cars[idx])
             elif idx == -1:
-                self._check()
+                self._watch.check(self.now)
                 self._push(self.now + self.config.check_every, CHECK, -1)
             else:
-                cpu = time.process_time()
-                releases = self.manager.tick(self.now, budget=self.config.replan_budget)
-                self.stats.replan_cpu_seconds.append(time.process_time() - cpu)
-                self._apply(releases)
+                self._tick()
                 self._push(self.now + self.config.tick_every, CHECK, -2)
         self.now = until
         return self.stats
@@ -168,6 +105,25 @@ class Simulation:
     def _push(self, at: float, kind: int, idx: int) -> None:
         self._seq += 1
         heapq.heappush(self._events, (at, self._seq, kind, idx))
+
+    def _tick(self) -> None:
+        """The manager's housekeeping; a re-plan in it may end a route where a vehicle stands.
+
+        That happens when the re-plan serves the last goal at the decision point (the old route
+        passed the goal, stepped aside and came back): the manager returns a release with
+        `base_end == route_end` for it, and the vehicle's task is done there.
+        """
+        cpu = time.process_time()
+        releases = self.manager.tick(self.now, budget=self.config.replan_budget)
+        self.stats.replan_cpu_seconds.append(time.process_time() - cpu)
+        self._apply(releases)
+        for release in releases:
+            car = self._by_name[release.vehicle_id]
+            v = self.manager.vehicle(car.name)
+            ended = release.base_end == release.route_end == v.passed == len(v.route) - 1
+            if ended and release.plan_id == v.plan_id and not car.moving:
+                self._stop_waiting(car)
+                self._settle(car)
 
     # -- tasks and planning -------------------------------------------------------------------
 
@@ -253,9 +209,7 @@ class Simulation:
             if p < len(v.route) - 1 and car.waiting_since < 0:
                 car.waiting_since = self.now
             return
-        if car.waiting_since >= 0:
-            self.stats.waits.append(self.now - car.waiting_since)
-            car.waiting_since = -1.0
+        self._stop_waiting(car)
         graph = manager.graphs[v.cls]
         u, n = v.route[p], v.route[p + 1]
         duration = max(0.0, v.ready_at - self.now) + graph.turn(v.headings[p], v.headings[p + 1])
@@ -286,16 +240,26 @@ class Simulation:
         self.stats.release_seconds.append(time.perf_counter() - began)
         self.stats.release_cpu_seconds.append(time.process_time() - cpu)
         self._apply(releases)
+        self._settle(car)
+
+    def _settle(self, car: _Car) -> None:
+        """The vehicle stands at a node: its task or route may be done, or it drives on."""
+        v = self.manager.vehicle(car.name)
         if self.config.finish_at_goal and self._at_goal(car):
             self._goal_done(car)
-            v = manager.vehicle(car.name)
+            v = self.manager.vehicle(car.name)
             if not car.moving and v.passed < len(v.route) - 1:
                 self._depart(car)
-            return
-        if passed == len(v.route) - 1:
+        elif v.passed == len(v.route) - 1:
             self._route_done(car)
         elif not car.moving:
             self._depart(car)
+
+    def _stop_waiting(self, car: _Car) -> None:
+        """The vehicle's stop at its decision point is over: record how long it was."""
+        if car.waiting_since >= 0:
+            self.stats.waits.append(self.now - car.waiting_since)
+            car.waiting_since = -1.0
 
     def _at_goal(self, car: _Car) -> bool:
         """Whether the vehicle has passed the last goal of its task on a plan for that task."""
@@ -349,60 +313,6 @@ class Simulation:
             occupant.setdefault(r, set()).add(car.idx)
         car.occupied = resources
 
-    def _check(self) -> None:
-        """Safety net: wait-for cycles, and vehicles stuck with a stuck wait-for chain.
-
-        A vehicle that has not moved for `stall_after` seconds while work is left is a stall
-        only if the vehicle at the end of its wait-for chain has not moved for that long either
-        (a long wait behind a vehicle that is driving is counted in `long_waits`).
-        """
-        self.stats.wait_cycles += len(self.manager.wait_cycles())
-        limit = self.config.stall_after
-        for car in self._cars:
-            v = self.manager.vehicle(car.name)
-            busy = car.goals is not None or v.passed < len(v.route) - 1
-            if not busy or car.moving or car.stalled or self.now - car.last_move <= limit:
-                continue
-            car.stalled = True
-            root = self._root(car)
-            if root.moving or self.now - root.last_move <= limit:
-                self.stats.long_waits += 1
-            else:
-                self.stats.stalls += 1
-                self.stats.stall_chains.append(self._describe_chain(car))
-
-    def _describe_chain(self, car: _Car) -> str:
-        """The stalled vehicle's wait-for chain, one line per vehicle (why it does not move)."""
-        lines, seen = [f"t={self.now:.0f}"], set()
-        while car.name not in seen:
-            seen.add(car.name)
-            v = self.manager.vehicle(car.name)
-            step = v.base + 1
-            holds = (v.edge_holds[step], v.node_holds[step]) if step < len(v.route) else ()
-            ahead = [repr(o) for h in holds if h for o in self.manager.table.blockers(h)]
-            lines.append(
-                f"{car.name} at {self.manager.layout.node_ids[v.route[v.passed]]} "
-                f"passed {v.passed} base {v.base} route {len(v.route)} moving {car.moving} "
-                f"still {self.now - car.last_move:.0f}s ready_at {v.ready_at:.0f} "
-                f"goals {car.goals is not None} complete {v.complete} static {v.static} "
-                f"blocked_by {v.blocked_by} ahead {ahead}"
-            )
-            following = self.manager.waiting_for(car.name)
-            if not following:
-                break
-            car = self._by_name[following[0]]
-        return " | ".join(lines)
-
-    def _root(self, car: _Car) -> _Car:
-        """The end of the chain of vehicles `car` waits for."""
-        seen = {car.name}
-        while True:
-            ahead = self.manager.waiting_for(car.name)
-            if not ahead or ahead[0] in seen:
-                return car
-            car = self._by_name[ahead[0]]
-            seen.add(car.name)
-
 
 def free_flow_time(
     manager: TrafficManager, vehicle_class: int, start: int, heading: int, goals: Sequence[Goal]
@@ -430,3 +340,12 @@ class _Empty:
 
 
 _EMPTY = _Empty()
+
+__all__ = [
+    "SimConfig",
+    "SimStats",
+    "Simulation",
+    "TaskRecord",
+    "Tasks",
+    "free_flow_time",
+]

@@ -14,10 +14,10 @@ Call pattern (all in the control process, under its lock):
 - `block(id, now)` / `restore(...)` make a vehicle in error, manual mode or offline a static
   obstacle and back; `waiting_for(id)` tells the UI whom a vehicle waits for.
 
-Step i of a route (i >= 1) is the move from node i-1 to node i: it holds the segment (cleared when
-the vehicle reports node i) and node i (cleared when it reports node i+1). The last node is held
-until the next plan. Base release extends over the longest prefix whose holds have no other
-vehicle queued ahead (see `traffic.reservations`), capped by the `ReleasePolicy`.
+Step i of a route (i >= 1) is the move from node i-1 to node i: it holds the segment and node i.
+The last node is held until the next plan. Clearing and base release (`on_progress`) live in
+`traffic.execution`, the queries and `block`/`restore` in `traffic.queries`, the opt-in
+lifelong mechanisms (`proceed`, stepping aside) in `traffic.aside`.
 """
 
 from __future__ import annotations
@@ -30,7 +30,6 @@ from traffic.aside import Lifelong, through_traffic
 from traffic.footprint import ConflictSets, VehicleClass
 from traffic.layout import Layout
 from traffic.plans import NO_HOLD, Goal, Plan, Release, ReleasePolicy, Vehicle
-from traffic.queries import FleetQueries
 from traffic.reservations import INF, Hold, ReservationTable
 from traffic.sipp import ANY_HEADING, ClassGraph, Path, heading_key, search
 from traffic.timing import lower_bounds, propagate
@@ -49,11 +48,13 @@ class NoPlanError(Exception):
         self.releases = tuple(releases)
 
 
-class TrafficManager(FleetQueries, Lifelong):
+class TrafficManager(Lifelong):
     """Plans, reservations and base releases for every vehicle of one layout.
 
-    The queries (`waiting_for`, `wait_cycles`, `stalled`, ...) and `block`/`restore` live in
-    `traffic.queries`.
+    Built in layers: the queries (`waiting_for`, `wait_cycles`, `stalled`, ...) and
+    `block`/`restore` (`traffic.queries`), clearing and base release (`on_progress`,
+    `traffic.execution`), the lifelong mechanisms (`traffic.aside`), and here planning and
+    `tick`.
     """
 
     def __init__(
@@ -147,8 +148,10 @@ class TrafficManager(FleetQueries, Lifelong):
 
         A vehicle at the end of its route gets a new plan (new `plan_id`, route index 0 is where
         it stands); a vehicle still driving keeps its released base and gets a new horizon from
-        its decision point. With `partial` (single goal only), an unreachable goal yields a plan
-        to the nearest node where the vehicle may wait (`plan.complete` is False).
+        its decision point (when the last goal is served at the decision point the horizon is
+        empty, and `plan.releases` says so with its `base_end == route_end`). With `partial`
+        (single goal only), an unreachable goal yields a plan to the nearest node where the
+        vehicle may wait (`plan.complete` is False).
         Raises NoPlanError when no plan exists now.
         """
         v = self.vehicle(vehicle_id)
@@ -169,7 +172,11 @@ class TrafficManager(FleetQueries, Lifelong):
         return replace(plan, releases=(*moved, *plan.releases)) if moved else plan
 
     def replan(self, vehicle_id: str, now: float) -> Plan | None:
-        """Re-plan the unreleased rest of the route to the same goals; None if kept as it was."""
+        """Re-plan the unreleased rest of the route to the same goals; None if kept as it was.
+
+        The route may then end at the decision point (see `plan`): the caller must treat the
+        vehicle as having reached its route end there.
+        """
         v = self.vehicle(vehicle_id)
         v.replanned_at = now
         remaining = [g for g, stop in zip(v.goals, v.stops, strict=True) if stop > v.base]
@@ -291,81 +298,16 @@ class TrafficManager(FleetQueries, Lifelong):
             v.ready_at = max(v.ready_at, v.arrive[b] + goals[0][1])
         releases: list[Release] = []
         own = self._extend(v, now)
+        if own is None and not new and b == len(v.route) - 1:
+            # the last goal is served at the decision point: no base to extend, but the caller
+            # must learn that the route ends there (an order update without a horizon)
+            own = Release(v.name, v.plan_id, b, b)
         if own is not None:
             releases.append(own)
         releases.extend(self._wake(v.idx, now))
         return releases
 
-    # -- execution ----------------------------------------------------------------------------
-
-    def on_progress(self, vehicle_id: str, passed: int, now: float) -> list[Release]:
-        """The vehicle reports it reached route index `passed`: clear, then release more.
-
-        Returns the base extensions this caused, this vehicle's first. Raises ValueError if the
-        vehicle reports a node beyond its released base.
-        """
-        v = self.vehicle(vehicle_id)
-        if passed <= v.passed:
-            return []
-        if passed > v.base:
-            raise ValueError(f"{vehicle_id} passed index {passed} beyond its base {v.base}")
-        table = self.table
-        for i in range(v.passed + 1, passed + 1):
-            edge = v.edge_holds[i]
-            if edge is not None:
-                table.remove(edge)
-        for i in range(v.passed, passed):
-            table.remove(v.node_holds[i])
-        v.passed = passed
-        v.last_progress = now
-        for goal, stop in zip(v.goals, v.stops, strict=True):
-            if stop == passed:
-                v.ready_at = now + goal[1]
-        releases: list[Release] = []
-        own = self._extend(v, now)
-        if own is not None:
-            releases.append(own)
-        releases.extend(self._wake(v.idx, now))
-        return releases
-
-    def _extend(self, v: Vehicle, now: float) -> Release | None:
-        """Extend the base over the longest releasable prefix within the policy's caps."""
-        last = min(len(v.route) - 1, v.hold_at)
-        b = start = v.base
-        table, policy = self.table, self.policy
-        was_blocked, v.blocked_by = v.blocked_by >= 0, -1
-        reach = max(policy.max_distance, policy.braking_distance)
-        while b < last and not v.static:
-            step = b + 1
-            if b > v.passed and (
-                step - v.passed > policy.max_steps or v.metres[step] - v.metres[v.passed] > reach
-            ):
-                break
-            edge, node = v.edge_holds[step], v.node_holds[step]
-            blocker = (table.blocker(edge) if edge is not None else None) or table.blocker(node)
-            if blocker is not None:
-                v.blocked_by = blocker.vehicle
-                if not was_blocked:
-                    v.blocked_since = now
-                self._waiters.setdefault(blocker.vehicle, set()).add(v.idx)
-                break
-            if edge is not None:
-                table.release(edge)
-            table.release(node)
-            b = step
-        if b == start:
-            return None
-        v.base = b
-        return Release(v.name, v.plan_id, b, len(v.route) - 1)
-
-    def _wake(self, idx: int, now: float) -> list[Release]:
-        """Re-check the vehicles that waited for vehicle `idx`."""
-        releases = []
-        for w in self._waiters.pop(idx, ()):
-            release = self._extend(self._vehicles[w], now)
-            if release is not None:
-                releases.append(release)
-        return releases
+    # -- housekeeping -------------------------------------------------------------------------
 
     def tick(self, now: float, *, budget: int = 2) -> list[Release]:
         """Housekeeping at about 1 Hz (milliseconds): re-time, then re-plan waiting vehicles.
@@ -374,7 +316,9 @@ class TrafficManager(FleetQueries, Lifelong):
         `budget` vehicles stopped at their decision point for `replan_after` seconds get their
         unreleased steps re-planned, which may let them pass ahead of a late vehicle.
         Every waiting vehicle's base is re-checked first (microseconds each): a safety net so
-        that a wake-up missed by the event path costs a vehicle at most one tick.
+        that a wake-up missed by the event path costs a vehicle at most one tick. A re-plan
+        that ends a route where the vehicle stands returns its release with `base_end ==
+        route_end`: its route (order) is done there.
         """
         releases: list[Release] = self._proceed_held(now) if self.goal_refuge else []
         for v in self._vehicles:

@@ -60,7 +60,7 @@ def test_the_fallback_plan_is_valid_and_within_its_weight() -> None:
 def test_a_stall_report_names_the_wait_for_chain_down_to_its_root() -> None:
     m = waiting_pair()  # b waits for a; a has its whole route released and stands at its start
     sim = Simulation(m, ListTasks({}), SimConfig(delay_probability=0.0))
-    chain = sim._describe_chain(sim._by_name["b"])
+    chain = sim._watch.describe_chain(sim._by_name["b"], 0.0)
     b_line, a_line = chain.split(" | ")[1:]
     assert b_line.startswith("b at 1,3")
     assert "blocked_by 0" in b_line
@@ -68,4 +68,4 @@ def test_a_stall_report_names_the_wait_for_chain_down_to_its_root() -> None:
     assert a_line.startswith("a at 0,0")
     assert "ahead []" in a_line
     m.on_progress("a", 6, 10.0)  # a at the end of its route: the root line must still render
-    assert "a at 0,6" in sim._describe_chain(sim._by_name["a"])
+    assert "a at 0,6" in sim._watch.describe_chain(sim._by_name["a"], 10.0)
