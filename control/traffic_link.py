@@ -106,6 +106,7 @@ class TrafficLink:
                     (envelope([DEFAULT_CLASS, *classes]),),
                     policy=self.policy,
                     quick_search=QUICK_SEARCH,
+                    replan_to_base=False,  # a goal's actions cannot move onto the sent base
                 )
                 self._indexes[map_id] = index
 

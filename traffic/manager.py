@@ -72,8 +72,13 @@ class TrafficManager(Lifelong):
         goal_refuge: bool = False,
         step_aside: bool = False,
         refuge_penalty: float = 0.0,
+        replan_to_base: bool = True,
     ) -> None:
         self.layout = layout
+        # a re-plan may serve the next goal at the decision point (the route then ends or
+        # turns there); control turns it off: VDA 5050 cannot add a goal's actions to a node
+        # already sent as base, so such a re-plan is dropped and the old plan kept
+        self.replan_to_base = replan_to_base
         self.classes = tuple(classes)
         self.policy = policy or ReleasePolicy()
         self.conflicts = conflicts or ConflictSets(layout, self.classes)
@@ -183,7 +188,7 @@ class TrafficManager(Lifelong):
         if not remaining or v.static:
             return None
         partial = not v.complete and len(remaining) == 1
-        return self._plan(v, remaining, now, partial)
+        return self._plan(v, remaining, now, partial, to_base=self.replan_to_base)
 
     def park(self, vehicle_id: str, now: float, *, candidates: int = 8) -> Plan:
         """Send a vehicle to the nearest parking node where it may stay (NoPlanError if none)."""
@@ -209,6 +214,7 @@ class TrafficManager(Lifelong):
         partial: bool,
         *,
         refuge: bool | None = None,
+        to_base: bool = True,
     ) -> Plan | None:
         if v.static:
             return None
@@ -229,7 +235,7 @@ class TrafficManager(Lifelong):
             path = run(max_expansions=cap, weight=self.weight)
             if path is None or not path.complete:
                 path = run(max_expansions=self.max_expansions, weight=fallback) or path
-        if path is None:
+        if path is None or (not to_base and path.stops[:1] == [0]):
             return None
         releases = self._commit(v, path, goals, now, hold=refuge)
         return v.snapshot(self.layout, releases)

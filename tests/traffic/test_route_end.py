@@ -67,3 +67,21 @@ def test_the_simulation_finishes_a_task_whose_route_a_replan_ended() -> None:
     assert tasks.done["a"] == 1
     assert m.plan_of("a").nodes == ("0,0", "0,1", GOAL)
     assert stats.collisions == 0
+
+
+def test_without_replans_to_the_base_the_old_route_is_kept() -> None:
+    # control's setting: the goal's actions are on the later visit of the goal in the order
+    starts = {"d": "0,8", "b": "1,3", "a": "0,0"}
+    policy = ReleasePolicy(max_steps=2, max_distance=2)
+    m = manager(Layout.grid(CELLS), starts, policy=policy, replan_to_base=False)
+    for name, tasks in TASKS.items():
+        m.plan(name, tasks[0], 0.0)
+    m.on_progress("a", 1, 1.0)
+    m.on_progress("a", 2, 2.0)
+    m.plan("d", m.plan_of("d").nodes[m.release_of("d").base_end], 3.0)
+
+    releases = m.tick(8.0)
+
+    assert m.plan_of("a").nodes == ("0,0", "0,1", GOAL, "1,2", GOAL)
+    assert m.vehicle("a").stops[-1] == 4
+    assert [r for r in releases if r.vehicle_id == "a"] == []
