@@ -140,6 +140,7 @@ def measure(vehicles: int, messages: int) -> dict[str, float]:
     duplicate."""
     topics = [f"uagv/v2/bench/AGV-{i}/state" for i in range(vehicles)]
     controller = Controller(store=NullStore(), interface_name="uagv")
+    controller.live_page_open = lambda: True  # rows as with a page open
     controller.load()
     deliver = _link(controller)
     for i, topic in enumerate(topics):  # register every vehicle, then give each an order to track

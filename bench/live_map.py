@@ -88,6 +88,7 @@ class SimulatedFleet:
 
         self.vehicles = vehicles
         self.controller = Controller(store=BenchStore(), interface_name="uagv")
+        self.controller.live_page_open = lambda: True  # as with a page open
         self.controller.load()
         self.header = 0
 

@@ -7,7 +7,7 @@ broadcaster into browser snapshots.
 import time
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import msgspec
 
@@ -15,6 +15,9 @@ import vda5050
 from control.capabilities import ORDER_MODES, Capabilities
 from control.execution import OrderExecution
 from control.session import Link, ProtocolSession
+
+if TYPE_CHECKING:
+    from control.snapshots import RowParts
 
 TRACKED_INSTANT_ACTIONS = 20  # the latest instant actions kept per vehicle for display
 
@@ -66,6 +69,8 @@ class LiveVehicle:
     needs_broadcast: bool = True
     was_available: bool = False
     last_link: Link = Link.UNKNOWN
+    # The parts of its last live-page row, reused while their inputs stay (snapshots.live_row).
+    row_parts: "RowParts | None" = field(default=None, repr=False, compare=False)
 
     @property
     def key(self) -> VehicleKey:

@@ -6,9 +6,10 @@ the paho thread never wait long behind it."""
 import logging
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
-from control import snapshots
+from control import broadcasts, snapshots
 from control.capabilities import refuse_instant_action
 from control.driver import OrderDriver
 from control.execution import LayoutIndex
@@ -41,6 +42,9 @@ class PeriodicWork:
     counters: Any
     _unflushed_outcomes: list[InstantActionTrack]
     _job_requests: list[dict[str, Any]]
+    # Whether a browser has the live page open (asked before each broadcast); a controller
+    # whose rows someone reads without a page (a benchmark, a test) sets its own.
+    live_page_open: Callable[[], bool] = broadcasts.LIVE_AUDIENCE.watching
 
     def collect_flush(self) -> FlushBatch:
         """Take what changed since the last flush (under the lock, without I/O).
@@ -148,7 +152,10 @@ class PeriodicWork:
 
     def collect_broadcast(self) -> list[dict[str, Any]]:
         """Browser rows of the vehicles that changed since the last broadcast (in chunks under
-        the lock, as in `collect_flush`)."""
+        the lock, as in `collect_flush`); none while no browser has the live page open: the
+        vehicles stay marked, so the first broadcast after a page opened has them all."""
+        if not self.live_page_open():
+            return []
         with self.lock:
             changed = [v for v in self.fleet.vehicles.values() if v.needs_broadcast]
         rows = []
@@ -156,7 +163,7 @@ class PeriodicWork:
             with self.lock:
                 for vehicle in changed[start : start + LOCK_CHUNK]:
                     vehicle.needs_broadcast = False
-                    rows.append(snapshots.browser_row(vehicle, self.layouts, self.traffic))
+                    rows.append(snapshots.live_row(vehicle, self.layouts, self.traffic))
         return rows
 
     def watch_vehicle(self, command: dict[str, Any]) -> None:
@@ -181,7 +188,7 @@ class PeriodicWork:
                 if vehicle is None or vehicle.pk is None:
                     continue
                 payload: dict[str, Any] = {
-                    "vehicle": snapshots.browser_row(vehicle, self.layouts, self.traffic),
+                    "vehicle": snapshots.live_row(vehicle, self.layouts, self.traffic),
                     "messages": batch.messages,
                 }
                 if batch.latest is not None:
@@ -192,6 +199,6 @@ class PeriodicWork:
     def all_browser_rows(self) -> list[dict[str, Any]]:
         with self.lock:
             return [
-                snapshots.browser_row(v, self.layouts, self.traffic)
+                snapshots.live_row(v, self.layouts, self.traffic)
                 for v in self.fleet.vehicles.values()
             ]
