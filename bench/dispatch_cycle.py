@@ -6,8 +6,12 @@ aisle nodes with the simulator's factsheet, a share of them busy with an active 
 pending orders on random pick stations. Times two cycles: a backlog (`--orders` pending, e.g.
 after a burst) and the steady state of issue 11 (one new order per second: one pending order).
 Counts the SQL queries of each cycle (a per-vehicle query would show as ~vehicles queries) and,
-with `--profile`, prints where the time goes. Steady-state cycles alternate with cycles that
-decode every vehicle's factsheet, as dispatch did before `orders.services.dispatch_factsheets`.
+with `--profile`, prints where the time goes. Steady-state cycles (which check only the
+shortlist of vehicles nearest to the order, `orders.services.dispatch_shortlist`) alternate
+with cycles over the whole fleet (as before the shortlist) and cycles that also decode every
+vehicle's factsheet (as before `orders.services.dispatch_factsheets`). Last, control's side of
+an assignment: the full re-read of every active order (what `order.assigned` cost before) and
+the read of the one order the command names (`DjangoStore.assigned_orders`).
 
     DATABASE_URL=postgres://postgres@127.0.0.1:5432/fleet_bench python -m bench.dispatch_cycle
 
@@ -18,6 +22,7 @@ at a database whose data you need (it deletes all transport orders and vehicles)
 import argparse
 import cProfile
 import io
+import json
 import os
 import pstats
 import random
@@ -25,6 +30,7 @@ import statistics
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 from unittest import mock
 from urllib.parse import urlsplit
@@ -107,24 +113,44 @@ def add_orders(layout: Any, count: int, rng: random.Random, **fields: Any) -> No
 
 
 def make_busy(share: float, rng: random.Random, layout: Any) -> int:
-    """Give a share of the vehicles an active (IN_PROGRESS) order, as in the load benchmark."""
-    from orders.models import TransportOrder
+    """Give a share of the vehicles an active (IN_PROGRESS) order with its route and two steps,
+    as in the load benchmark (control reads them all on a full sync)."""
+    from orders.models import OrderStep, TransportOrder
     from robots.models import Vehicle
 
     vehicles = list(Vehicle.objects.order_by("pk"))
     busy = rng.sample(vehicles, int(len(vehicles) * share))
-    picks = list(layout.stations.filter(kind="PICK"))
-    drops = list(layout.stations.filter(kind="DROP"))
-    TransportOrder.objects.bulk_create(
+    picks = list(layout.stations.filter(kind="PICK").select_related("node"))
+    drops = list(layout.stations.filter(kind="DROP").select_related("node"))
+    orders = TransportOrder.objects.bulk_create(
         TransportOrder(
-            source=rng.choice(picks),
-            destination=rng.choice(drops),
+            source=(pick := rng.choice(picks)),
+            destination=(drop := rng.choice(drops)),
             status=TransportOrder.Status.IN_PROGRESS,
             vehicle=vehicle,
+            route=[vehicle.last_node_id, pick.node.node_id, drop.node.node_id],
+            route_steps=[1, 2],
+            vda_order_id=f"BUSY-{vehicle.pk}",
         )
         for vehicle in busy
     )
+    OrderStep.objects.bulk_create(
+        OrderStep(order=order, index=index, station=station, operation=operation)
+        for order in orders
+        for index, (station, operation) in enumerate(
+            [(order.source, OrderStep.Operation.PICK), (order.destination, "DROP")]
+        )
+    )
     return len(busy)
+
+
+@contextmanager
+def whole_fleet() -> Iterator[None]:
+    """Dispatch as before `orders.services.dispatch_shortlist`: every idle vehicle checked."""
+    from orders.services import dispatch_shortlist
+
+    with mock.patch.object(dispatch_shortlist, "MAX_ORDERS", 0):
+        yield
 
 
 @contextmanager
@@ -140,6 +166,7 @@ def decoding_every_factsheet() -> Iterator[None]:
         return read(**kwargs | {"with_factsheets": True})
 
     with (
+        whole_fleet(),
         mock.patch.object(selectors, "get_dispatch_fleet", full),
         mock.patch.object(dispatch, "attach_factsheets", return_value=None),
     ):
@@ -166,12 +193,41 @@ def cycle(profile: bool) -> dict[str, Any]:
         "ms": round(elapsed, 1),
         "queries": len(queries.captured_queries),
         "assigned": len(assigned),
+        "orders": [o.pk for o in assigned],
     }
     if profiler:
         out = io.StringIO()
         pstats.Stats(profiler, stream=out).sort_stats("cumulative").print_stats(30)
         row["profile"] = out.getvalue()
     return row
+
+
+def control_reads(assigned: list[int], repeats: int) -> dict[str, float]:
+    """Milliseconds (median) of control's two reads after an assignment: every active order
+    (the full sync) and only the orders the `order.assigned` command names."""
+    from django.conf import settings
+    from django.db import connections
+
+    from control.persistence import DjangoStore
+
+    # As run_control: the connection is kept, not opened again by each read.
+    connections.settings["default"]["CONN_MAX_AGE"] = settings.CONTROL_DB_CONN_MAX_AGE
+    connections["default"].close()
+    store = DjangoStore()
+    full: list[float] = []
+    named: list[float] = []
+    for _ in range(repeats):  # alternating, as the cycles
+        started = time.perf_counter()
+        count = len(store.active_orders())
+        full.append((time.perf_counter() - started) * 1000)
+        started = time.perf_counter()
+        store.assigned_orders(orders=assigned[-1:], charge_sessions=[], moves=[])
+        named.append((time.perf_counter() - started) * 1000)
+    return {
+        "control_active_orders": count,
+        "control_full_read_ms_median": round(statistics.median(full), 1),
+        "control_named_read_ms_median": round(statistics.median(named), 1),
+    }
 
 
 def main() -> None:
@@ -181,6 +237,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5, help="steady-state cycles timed")
     parser.add_argument("--seed", type=int, default=5050)
     parser.add_argument("--profile", action="store_true", help="print a profile of each kind")
+    parser.add_argument("--json", type=Path, help="write the figures here, not bench/results")
     args = parser.parse_args()
     url = os.environ.get("DATABASE_URL", "")
     if not url.startswith("postgres"):
@@ -207,7 +264,7 @@ def main() -> None:
     print(f"first cycle of a process: {first['ms']:.0f} ms, {first['queries']} queries")
     add_orders(layout, args.orders, rng)
     backlog = cycle(args.profile)
-    figures |= {f"backlog_{k}": v for k, v in backlog.items() if k != "profile"}
+    figures |= {f"backlog_{k}": v for k, v in backlog.items() if k not in {"profile", "orders"}}
     print(
         f"backlog: {args.orders} pending, {args.vehicles} vehicles ({busy} busy): "
         f"{backlog['ms']:.0f} ms, {backlog['queries']} queries, {backlog['assigned']} assigned"
@@ -216,14 +273,21 @@ def main() -> None:
         print(backlog["profile"])
 
     steady: list[dict[str, Any]] = []
+    whole: list[dict[str, Any]] = []  # as before the shortlist: every idle vehicle checked
     decoding: list[dict[str, Any]] = []  # as before the cache: every factsheet decoded
-    for _ in range(args.repeats):  # alternating, so both see the same load of the machine
+    assigned: list[int] = []
+    for _ in range(args.repeats):  # alternating, so all see the same load of the machine
         add_orders(layout, 1, rng)
         steady.append(cycle(args.profile and not steady))
+        assigned += steady[-1]["orders"]
+        add_orders(layout, 1, rng)
+        with whole_fleet():
+            whole.append(cycle(profile=False))
         add_orders(layout, 1, rng)
         with decoding_every_factsheet():
             decoding.append(cycle(profile=False))
-    for name, rows in (("steady", steady), ("steady_decoding_all", decoding)):
+    series = (("steady", steady), ("steady_whole_fleet", whole), ("steady_decoding_all", decoding))
+    for name, rows in series:
         figures[f"{name}_ms_median"] = round(statistics.median(r["ms"] for r in rows), 1)
         figures[f"{name}_ms_max"] = max(r["ms"] for r in rows)
         figures[f"{name}_queries"] = rows[0]["queries"]
@@ -233,8 +297,18 @@ def main() -> None:
         )
     if args.profile:
         print(steady[0]["profile"])
-    path = results.write("dispatch_cycle", figures)
-    print(f"wrote {path}")
+    reads = control_reads(assigned, args.repeats)
+    figures |= reads
+    print(
+        f"control after an assignment, {reads['control_active_orders']} active orders: full "
+        f"re-read {reads['control_full_read_ms_median']:.1f} ms, the named order "
+        f"{reads['control_named_read_ms_median']:.1f} ms (median)"
+    )
+    if args.json:
+        args.json.write_text(json.dumps(figures, indent=2, sort_keys=True) + "\n")
+        print(f"wrote {args.json}")
+    else:
+        print(f"wrote {results.write('dispatch_cycle', figures)}")
 
 
 if __name__ == "__main__":

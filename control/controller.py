@@ -233,8 +233,9 @@ class Controller(PeriodicWork):
             for vehicle in self.fleet.vehicles.values():
                 vehicle.dialect = dialects.get(vehicle.pk or -1, "STANDARD")
 
-    def sync(self, orders: list[ActiveOrder]) -> None:
-        """Start, adopt, extend, resend or cancel the assigned orders read from the database.
+    def sync(self, orders: list[ActiveOrder], *, read_at: float | None = None) -> None:
+        """Start, adopt, extend, resend or cancel the assigned orders read from the database
+        (the read began at `read_at`, time.monotonic(); None: just now).
 
         The lock is taken per order, not for the whole list: starting an order plans its route
         (milliseconds, more in congestion), and state messages must not wait for a dozen of
@@ -243,8 +244,24 @@ class Controller(PeriodicWork):
         it go)."""
         with self.lock:
             ready = self.distribution.ready_orders(orders)
-            self.driver.begin_sync(ready)
-        for order in ready:
+            self.driver.begin_sync(ready, read_at=read_at)
+        self._sync_each(ready)
+
+    def start_orders(self, orders: list[ActiveOrder]) -> None:
+        """Start the orders an `order.assigned` command names, read on their own, without
+        waiting for the next full `sync` (which still follows and covers them as any other).
+
+        The same steps and guarantees as `sync`: a vehicle busy with another order or not
+        available leaves its order to a later sync, an order that ended in memory is not
+        started again, and every publish is checked against the lease (Publisher). Safe from
+        another thread than the one that syncs (control's command thread)."""
+        with self.lock:
+            ready = self.distribution.ready_orders(orders)
+            self.driver.add_orders(ready)
+        self._sync_each(ready)
+
+    def _sync_each(self, orders: list[ActiveOrder]) -> None:
+        for order in orders:
             started = time.perf_counter()
             with self.lock:
                 self.driver.sync_order(self.fleet.by_pk, order)

@@ -50,6 +50,9 @@ class OrderDriver:
         self.traffic = traffic
         self.progress: list[Progress] = []
         self._orders: dict[int, ActiveOrder] = {}
+        # Orders taken on their own (add_orders), with when: a full read that began before
+        # one was taken may not list it yet, so the sync of that read keeps it.
+        self._added: dict[int, tuple[float, ActiveOrder]] = {}
         # Orders that ended in memory; the database may list them as active until the next
         # flush, and sync must not adopt them again.
         self._ended: set[int] = set()
@@ -62,13 +65,29 @@ class OrderDriver:
         for order in orders:
             self.sync_order(vehicles, order)
 
-    def begin_sync(self, orders: list[ActiveOrder]) -> None:
-        """The first part of `sync`: take the database's list and let traffic re-time."""
+    def begin_sync(self, orders: list[ActiveOrder], *, read_at: float | None = None) -> None:
+        """The first part of `sync`: take the database's list (read from `read_at` on, as
+        time.monotonic(); None: just now) and let traffic re-time."""
         if self.traffic is not None:
             self.traffic.ensure(self.layouts())
             self.traffic.tick(time.monotonic())  # re-timed and re-planned bases go out below
         self._orders = {o.transport_order_id: o for o in orders}
+        since = time.monotonic() if read_at is None else read_at
+        self._added = {pk: added for pk, added in self._added.items() if added[0] >= since}
+        for pk, (_, order) in self._added.items():
+            self._orders.setdefault(pk, order)  # taken after the read began: not in it yet
         self._ended &= self._orders.keys()  # forget what the database closed
+
+    def add_orders(self, orders: list[ActiveOrder]) -> None:
+        """Take orders read on their own (named by an `order.assigned` command) next to those
+        of the last sync, without the traffic re-timing of a full sync; `sync_order` follows.
+        The next full read lists them too (see `_added` for one that began before)."""
+        if self.traffic is not None:
+            self.traffic.ensure(self.layouts())
+        now = time.monotonic()
+        for order in orders:
+            self._orders[order.transport_order_id] = order
+            self._added[order.transport_order_id] = (now, order)
 
     def sync_order(self, vehicles: Callable[[int], LiveVehicle | None], order: ActiveOrder) -> None:
         """The rest of `sync`, one order at a time (the controller may let go of its lock

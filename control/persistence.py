@@ -1,7 +1,7 @@
 """The database side of `control`: loading on start, assigned orders, and batched flushes."""
 
 import logging
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 from django.conf import settings
@@ -75,24 +75,24 @@ class DjangoStore:
 
     def active_orders(self) -> list[ActiveOrder]:
         close_old_connections()
-        return [
-            ActiveOrder(
-                transport_order_id=order.pk,
-                vda_order_id=order.vda_order_id,
-                vehicle_pk=order.vehicle_id,
-                route=list(order.route),
-                pickup_node=order.source.node.node_id,
-                map_id=order.source.map.map_id,
-                pick_station=order.source.station_id,
-                drop_station=order.destination.station_id,
-                load_id=order.load_id,
-                load_type=order.load_type,
-                cancel_requested=order.cancel_requested,
-                steps=_steps(order),
-            )
-            for order in order_selectors.list_active_orders()
-            if order.vehicle_id is not None and order.route
-        ] + _jobs()
+        return _transport_orders(order_selectors.list_active_orders()) + _jobs(JOB_SOURCES.values())
+
+    def assigned_orders(
+        self, *, orders: list[int], charge_sessions: list[int], moves: list[int]
+    ) -> list[ActiveOrder]:
+        """The active orders and jobs with these ids (an `order.assigned` command names them):
+        the few rows control needs to start them, instead of every active order (issue 11).
+        Ids of orders no longer active are left out."""
+        close_old_connections()
+        found = []
+        if orders:
+            found += _transport_orders(order_selectors.list_active_orders().filter(pk__in=orders))
+        wanted = {job_order_id("charge", pk) for pk in charge_sessions}
+        wanted |= {job_order_id("park", pk) for pk in moves}
+        kinds = {kind for kind, named in (("charge", charge_sessions), ("park", moves)) if named}
+        if kinds:
+            found += [job for job in _jobs(kinds) if job.transport_order_id in wanted]
+        return found
 
     def flush(self, batch: FlushBatch) -> dict[tuple[str, str], int]:
         """Register new vehicles, bulk-update snapshots, then apply order progress in order."""
@@ -155,6 +155,28 @@ def observe_floor(snapshots: Sequence[Mapping[str, Any]]) -> None:
     maintenance_services.observe_snapshots(snapshots=snapshots)
 
 
+def _transport_orders(orders: Iterable[TransportOrder]) -> list[ActiveOrder]:
+    """Assigned or running transport orders (from `list_active_orders`) as control sees them."""
+    return [
+        ActiveOrder(
+            transport_order_id=order.pk,
+            vda_order_id=order.vda_order_id,
+            vehicle_pk=order.vehicle_id,
+            route=list(order.route),
+            pickup_node=order.source.node.node_id,
+            map_id=order.source.map.map_id,
+            pick_station=order.source.station_id,
+            drop_station=order.destination.station_id,
+            load_id=order.load_id,
+            load_type=order.load_type,
+            cancel_requested=order.cancel_requested,
+            steps=_steps(order),
+        )
+        for order in orders
+        if order.vehicle_id is not None and order.route
+    ]
+
+
 def _steps(order: TransportOrder) -> tuple[StepPlan, ...]:
     """The order's stops at the route indices dispatch recorded; none for an order assigned
     before steps existed (control then picks at the source and drops at the end)."""
@@ -184,10 +206,15 @@ def job_order_id(kind: str, pk: int) -> int:
     return -(2 * pk + (1 if kind == "park" else 0))
 
 
-def _jobs() -> list[ActiveOrder]:
-    """Charge sessions driving to their point and moves to a park station, as orders."""
-    jobs = [("charge", job["session"], job) for job in battery_selectors.list_charge_jobs()]
-    jobs += [("park", job["move"], job) for job in maintenance_selectors.list_move_jobs()]
+def _jobs(kinds: Iterable[str]) -> list[ActiveOrder]:
+    """Charge sessions driving to their point and moves to a park station, as orders (only
+    the `kinds` asked for: "charge", "park")."""
+    kinds = set(kinds)
+    jobs = []
+    if "charge" in kinds:
+        jobs += [("charge", job["session"], job) for job in battery_selectors.list_charge_jobs()]
+    if "park" in kinds:
+        jobs += [("park", job["move"], job) for job in maintenance_selectors.list_move_jobs()]
     return [
         ActiveOrder(
             transport_order_id=job_order_id(kind, int(pk)),

@@ -1,12 +1,14 @@
 """Runs a Controller: the paho link to the broker and the periodic main loop."""
 
 import logging
+import queue
 import threading
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import paho.mqtt.client as mqtt
+from django.db import connections
 
 from control import map_store
 from control.controller import Controller
@@ -22,6 +24,20 @@ SUBSCRIBED = {
     TopicKind.FACTSHEET: 0,
     TopicKind.VISUALIZATION: 0,
 }
+# What an `order.assigned` command may name, by payload key: the ids of transport orders
+# (dispatch), of a battery charge session and of a maintenance move to a station.
+ASSIGNED_KEYS = {"orders": "orders", "charge_session": "charge_sessions", "service_move": "moves"}
+
+
+@runtime_checkable
+class AssignedOrderStore(Protocol):
+    """A store that reads the orders an `order.assigned` command names on their own (see
+    control.persistence.DjangoStore.assigned_orders); without it every command costs the full
+    re-read of all active orders."""
+
+    def assigned_orders(
+        self, *, orders: list[int], charge_sessions: list[int], moves: list[int]
+    ) -> list[ActiveOrder]: ...
 
 
 class MqttLink:
@@ -71,7 +87,13 @@ class MqttLink:
 
 
 class ControlLoop:
-    """The main thread of `control`: commands, order sync, flushes and broadcasts on timers."""
+    """The main thread of `control`: commands, order sync, flushes and broadcasts on timers.
+
+    Commands come in on a thread of their own (`_receive`), which starts the orders that
+    `order.assigned` commands name at once, whatever the main thread is doing (a flush or a
+    full sync of a large fleet takes a good part of a second), and hands every other command
+    to the main thread.
+    """
 
     def __init__(
         self,
@@ -93,6 +115,8 @@ class ControlLoop:
         self._stop = threading.Event()
         self.finished = threading.Event()  # set when run() has returned (helpers stop with it)
         self._layouts_revision: object = None
+        self._commands: queue.Queue[dict[str, Any]] = queue.Queue()  # for the main thread
+        self._receiving = threading.Event()
 
     def stop(self) -> None:
         """Ask the loop to finish; safe from a signal handler or another thread."""
@@ -105,18 +129,18 @@ class ControlLoop:
         due = dict.fromkeys(
             ("SYNC_INTERVAL", "FLUSH_INTERVAL", "BROADCAST_INTERVAL", "REGISTRY_INTERVAL"), 0.0
         )
+        self._receiving.set()
+        receiver = threading.Thread(target=self._receive, name="control-commands", daemon=True)
+        receiver.start()
         try:
             while not self._stop.is_set() and not self._lost():
                 # Wait for commands until the next timer is due (at most the broadcast interval):
                 # a command still wakes the loop at once, and an idle loop does not spin.
                 wait = min(due.values()) - time.monotonic()
-                commands = self._safely(self.receive_commands, min(max(wait, 0.01), 0.2)) or []
-                for command in commands:
-                    self._safely(self.controller.execute, command)
-                if any(str(c.get("kind", "")).startswith("maps.") for c in commands):
-                    self._safely(self._load_distribution)  # a release was distributed
+                commands = self._next_commands(min(max(wait, 0.01), 0.2))
+                self._take_commands(commands, due)
                 now = time.monotonic()
-                if commands or now >= due["SYNC_INTERVAL"]:
+                if now >= due["SYNC_INTERVAL"]:
                     self._safely(self._sync)
                     due["SYNC_INTERVAL"] = now + self.intervals["SYNC_INTERVAL"]
                 if now >= due["REGISTRY_INTERVAL"]:
@@ -135,6 +159,8 @@ class ControlLoop:
                             self._safely(self.stream_vehicle, pk, event)
                     due["BROADCAST_INTERVAL"] = now + self.intervals["BROADCAST_INTERVAL"]
         finally:
+            self._receiving.clear()
+            receiver.join(timeout=5.0)
             if self._may_write():
                 self._safely(self.controller.flush)
             self.link.stop()
@@ -174,12 +200,65 @@ class ControlLoop:
                 self.controller.distribution.requeue(rows)  # written with the next save
             raise
 
+    def _receive(self) -> None:
+        """The command thread: waits on the queue, starts the orders `order.assigned` commands
+        name (read on their own, not every active order) and passes the rest to the main
+        thread. The periodic full sync stays the safety net for a lost command."""
+        store = self.controller.store
+        try:
+            while self._receiving.is_set():
+                commands = self._safely(self.receive_commands, 0.2) or []
+                named = assigned_jobs(commands)
+                if isinstance(store, AssignedOrderStore) and (
+                    not any(named.values()) or self._safely(self._start_assigned, store, named)
+                ):  # else (no named reads, or they failed) the main thread's full sync does it
+                    commands = [c for c in commands if not names_assigned(c)]
+                for command in commands:
+                    self._commands.put(command)
+        finally:
+            connections.close_all()  # this thread's own database connection
+
+    def _next_commands(self, timeout: float) -> list[dict[str, Any]]:
+        """Wait up to `timeout` s for what the command thread passes on; then take all."""
+        try:
+            commands = [self._commands.get(timeout=timeout)]
+        except queue.Empty:
+            return []
+        while True:
+            try:
+                commands.append(self._commands.get_nowait())
+            except queue.Empty:
+                return commands
+
+    def _take_commands(self, commands: list[dict[str, Any]], due: dict[str, float]) -> None:
+        """Carry out `commands` (the main thread's part); any of them makes the full sync due
+        now, as before."""
+        for command in commands:
+            self._safely(self.controller.execute, command)
+        if any(str(c.get("kind", "")).startswith("maps.") for c in commands):
+            self._safely(self._load_distribution)  # a release was distributed
+        if commands:
+            due["SYNC_INTERVAL"] = 0.0
+
+    def _start_assigned(self, store: AssignedOrderStore, named: dict[str, list[int]]) -> bool:
+        orders = store.assigned_orders(
+            orders=named["orders"], charge_sessions=named["charge_sessions"], moves=named["moves"]
+        )
+        self._know_maps(orders)
+        self.controller.start_orders(orders)
+        self.controller.counters["orders_read_on_command"] += len(orders)
+        return True
+
     def _sync(self) -> None:
+        read_at = time.monotonic()  # orders the command thread starts from now on are not read
         orders: list[ActiveOrder] = self.controller.store.active_orders()
+        self._know_maps(orders)
+        self.controller.sync(orders, read_at=read_at)
+
+    def _know_maps(self, orders: list[ActiveOrder]) -> None:
         known = {o.map_id for o in orders}
         if not known <= self.controller.layouts.keys():
             self.controller.layouts = self.controller.store.load_layouts()  # a map was added
-        self.controller.sync(orders)
 
     def _safely(self, func: Callable[..., Any], *args: Any) -> Any:
         try:
@@ -188,3 +267,25 @@ class ControlLoop:
             logger.exception("%s failed", getattr(func, "__name__", func))
             time.sleep(0.5)
             return None
+
+
+def names_assigned(command: dict[str, Any]) -> bool:
+    """Whether `command` is an `order.assigned` naming at least one valid id."""
+    return command.get("kind") == "order.assigned" and any(
+        _ids(command.get(field)) for field in ASSIGNED_KEYS
+    )
+
+
+def assigned_jobs(commands: list[dict[str, Any]]) -> dict[str, list[int]]:
+    """The ids the `order.assigned` commands among `commands` name, per ASSIGNED_KEYS value
+    (other commands are left out: the main thread carries them out)."""
+    named: dict[str, list[int]] = {key: [] for key in ASSIGNED_KEYS.values()}
+    for command in filter(names_assigned, commands):
+        for field, key in ASSIGNED_KEYS.items():
+            named[key] += _ids(command.get(field))
+    return named
+
+
+def _ids(value: Any) -> list[int]:
+    values = value if isinstance(value, list) else [value]
+    return [v for v in values if isinstance(v, int) and not isinstance(v, bool)]

@@ -9,6 +9,7 @@ the web process) it is an in-process queue.
 import json
 import logging
 import queue
+from functools import lru_cache
 from typing import Any
 
 import redis
@@ -20,10 +21,15 @@ QUEUE_KEY = "fleet:control:commands"
 _local_queue: "queue.Queue[dict[str, Any]]" = queue.Queue()
 
 
+@lru_cache(maxsize=4)
+def _client_for(url: str) -> redis.Redis:
+    # One connection pool per process and URL: a command costs one round trip, not a new TCP
+    # connection (control polls between its periodic steps, so this adds up).
+    return redis.Redis.from_url(url, socket_timeout=5)
+
+
 def _redis() -> redis.Redis | None:
-    if not settings.REDIS_URL:
-        return None
-    return redis.Redis.from_url(settings.REDIS_URL, socket_timeout=5)
+    return _client_for(settings.REDIS_URL) if settings.REDIS_URL else None
 
 
 def send_command(kind: str, **payload: Any) -> None:
@@ -40,24 +46,30 @@ def send_command(kind: str, **payload: Any) -> None:
 
 
 def receive_commands(timeout: float) -> list[dict[str, Any]]:
-    """Wait up to `timeout` seconds for commands and return all that are queued (for `control`)."""
+    """Wait up to `timeout` seconds for commands and return all that are queued (for `control`);
+    with `timeout` <= 0 only take what is queued now, without waiting."""
     client = _redis()
     if client is None:
         return _drain_local(timeout)
-    first = client.brpop([QUEUE_KEY], timeout=timeout)  # Redis >= 6 takes fractions
-    if first is None:
-        return []
-    raw: list[bytes | str] = [first[1]]
+    if timeout > 0:
+        first = client.brpop([QUEUE_KEY], timeout=timeout)  # Redis >= 6 takes fractions
+        if first is None:
+            return []
+        raw: list[bytes | str] = [first[1]]
+    else:  # BRPOP would read 0 as "wait forever"
+        raw = []
     while isinstance(more := client.rpop(QUEUE_KEY), bytes | str):
         raw.append(more)
     return [_parse(item) for item in raw if item]
 
 
 def _drain_local(timeout: float) -> list[dict[str, Any]]:
-    try:
-        commands = [_local_queue.get(timeout=timeout)]
-    except queue.Empty:
-        return []
+    commands: list[dict[str, Any]] = []
+    if timeout > 0:
+        try:
+            commands.append(_local_queue.get(timeout=timeout))
+        except queue.Empty:
+            return []
     while True:
         try:
             commands.append(_local_queue.get_nowait())

@@ -5,12 +5,15 @@ import pytest
 from control.controller import Controller
 from control.execution import OrderExecution, Window
 from control.order_messages import LoadJob, build_order
-from control.persistence import DjangoStore
+from control.persistence import DjangoStore, job_order_id
+from maintenance.services import send_to_station
+from maps.models import Station
 from maps.services import create_zone
 from orders import services
-from orders.models import VehicleCommand
+from orders.models import TransportOrder, VehicleCommand
 from robots.models import Vehicle
 from tests.control.fakes import state
+from tests.factories import VehicleFactory
 from tests.maps.zones_support import box
 
 pytestmark = pytest.mark.django_db(transaction=True)  # the store closes stale connections
@@ -84,3 +87,25 @@ def test_a_speed_zone_lowers_max_speed_in_the_sent_order(demo_map) -> None:
 
     assert [e.max_speed for e in edges] == [None, 0.4, None]
     assert [e.max_speed for e in unlimited] == [None, None, None]
+
+
+def test_the_store_reads_the_orders_a_command_names_and_only_those(demo_map, monkeypatch) -> None:
+    """Issue 11: `order.assigned` names its orders; control reads those rows, not all."""
+    for module in ("orders.services.dispatch", "maintenance.services.moves"):
+        monkeypatch.setattr(f"{module}.send_command", lambda kind, **payload: None)
+    vehicles = [VehicleFactory(last_node_id=f"A{n}.0") for n in range(3)]
+    pick, drop = (Station.objects.get(station_id=s) for s in ("PICK-1", "DROP-1"))
+    named, other = (services.create_transport_order(source=pick, destination=drop) for _ in "ab")
+    services.dispatch_pending_orders()
+    done = services.create_transport_order(source=pick, destination=drop)
+    done.status = TransportOrder.Status.FINISHED
+    done.save()
+    move = send_to_station(vehicle=vehicles[2])
+    store = DjangoStore()
+
+    found = store.assigned_orders(orders=[named.pk, done.pk], charge_sessions=[], moves=[move.pk])
+
+    every = {o.transport_order_id: o for o in store.active_orders()}
+    assert set(every) == {named.pk, other.pk, job_order_id("park", move.pk)}
+    assert found == [every[named.pk], every[job_order_id("park", move.pk)]]
+    assert store.assigned_orders(orders=[], charge_sessions=[move.pk], moves=[]) == []
