@@ -29,7 +29,7 @@ def main() -> int:
         rows.append("split_brain")
     summary: dict[str, object] = {}
     for row in rows:
-        started = time.monotonic()
+        started, wall_start = time.monotonic(), time.time()
         if row == "split_brain":  # the standby helper's row: 20 rounds is its §5 count
             rounds = "20" if args.full else "3"
             argv = [sys.executable, "-m", "bench.faults.split_brain", "--rounds", rounds]
@@ -39,7 +39,7 @@ def main() -> int:
         code = subprocess.call(argv)
         result = RESULTS / f"faults_{row}.json"
         passed = None
-        if result.exists():
+        if result.exists() and result.stat().st_mtime >= wall_start:  # not an earlier run's
             passed = json.loads(result.read_text()).get("passed")
         summary[row] = {"exit": code, "passed": passed, "s": round(time.monotonic() - started)}
         print(f"== {row}: exit {code}, passed {passed}", flush=True)

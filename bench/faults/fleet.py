@@ -41,8 +41,16 @@ class Process:
 
     def start(self) -> None:
         self._log = self.log_path.open("ab")
+        # A session of its own: when the shell that started the row exits while a vehicle is
+        # SIGSTOPped, the kernel sends the orphaned process group SIGHUP + SIGCONT, which woke the
+        # frozen vehicle and restarted Celery mid-row. Every signal here goes to the pid anyway.
         self.popen = subprocess.Popen(
-            self.argv, cwd=ROOT, env=self.env, stdout=self._log, stderr=subprocess.STDOUT
+            self.argv,
+            cwd=ROOT,
+            env=self.env,
+            stdout=self._log,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
         )
         self.starts += 1
 

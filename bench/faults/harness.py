@@ -50,6 +50,7 @@ def row_context(*, full: bool, appendonly: bool = True) -> Iterator[Context]:
         import django
 
         django.setup()
+        from battery.services import create_missing_chargers
         from maps.demo import warehouse_layout
         from maps.services import create_layout
 
@@ -59,6 +60,10 @@ def row_context(*, full: bool, appendonly: bool = True) -> Iterator[Context]:
         observer = Observer(stack.mosquitto.url, fleet.interface)
         context = Context(stack=stack, fleet=fleet, observer=observer, full=full)
         context.layout = create_layout(spec=warehouse_layout(columns=6, rows=4))
+        # The layout's two charge stations get chargers, as a site runs `create_chargers`: the
+        # default charging policy then sends low vehicles to charge (beat's charging cycle), so
+        # long rows do not stall on flat batteries ("battery low" holds every vehicle).
+        create_missing_chargers()
         fleet.write_layout(context.layout)
         yield context
     finally:
@@ -170,6 +175,7 @@ def verdict(context: Context, ids: list[int]) -> dict[str, Any]:
         "lost_orders": len(ids) - sum(statuses[s] for s in TERMINAL),
         "incomplete_histories": incomplete,
         **context.observer.figures(),
+        **charging_figures(),
     }
     figures["all_finished"] = statuses.get("FINISHED", 0) == len(ids)
     figures["nothing_lost"] = (
@@ -179,6 +185,25 @@ def verdict(context: Context, ids: list[int]) -> dict[str, Any]:
         and figures["orders_sent_to_two_vehicles"] == 0
     )
     return figures
+
+
+def charging_figures() -> dict[str, Any]:
+    """Charge sessions of the row by status and the lowest charge any vehicle reported during
+    the row (battery samples, taken on every 1 % change) and at its end: a row that runs long
+    enough to need charging shows sessions DONE and a lowest charge above the critical level."""
+    from django.db.models import Min
+
+    from battery.models import BatterySample, ChargeSession
+    from robots.models import Vehicle
+
+    sessions = Counter(ChargeSession.objects.values_list("status", flat=True))
+    seen = BatterySample.objects.aggregate(lowest=Min("charge"))["lowest"]
+    at_end = Vehicle.objects.aggregate(lowest=Min("battery_charge"))["lowest"]
+    return {
+        "charge_sessions": dict(sessions),
+        "battery_lowest_pct_seen": None if seen is None else round(seen, 1),
+        "battery_lowest_pct_at_end": None if at_end is None else round(at_end, 1),
+    }
 
 
 def timed(seconds: float) -> float:

@@ -55,31 +55,23 @@ def _chown(path: Path, user: str) -> None:
         shutil.chown(path, user, user)
 
 
-class Mosquitto:
-    """A broker with persistence saved on every change (RELIABILITY §0.2: SIGKILL keeps QoS 1)."""
+class _Server:
+    """A service process we start ourselves and signal by its `Popen` (Mosquitto, Redis), on a
+    free port with its own directory; subclasses say only how it is invoked."""
 
-    def __init__(self, workdir: Path) -> None:
-        self.dir = workdir / "mosquitto"
+    def __init__(self, workdir: Path, name: str) -> None:
+        self.dir = workdir / name
         self.dir.mkdir(parents=True, exist_ok=True)
-        _chown(self.dir, "mosquitto")
         self.port = free_port()
-        self.conf = self.dir / "mosquitto.conf"
-        self.conf.write_text(
-            f"listener {self.port} 127.0.0.1\nallow_anonymous true\n"
-            f"persistence true\npersistence_location {self.dir}/\n"
-            "autosave_on_changes true\nautosave_interval 1\n"
-            "max_queued_messages 100000\n"
-            f"log_dest file {self.dir}/mosquitto.log\n"
-        )
         self.popen: subprocess.Popen[bytes] | None = None
 
-    @property
-    def url(self) -> str:
-        return f"mqtt://127.0.0.1:{self.port}"
+    def argv(self) -> list[str]:
+        raise NotImplementedError
 
     def start(self) -> float:
+        """Start it; seconds until its port accepts connections."""
         self.popen = subprocess.Popen(
-            ["mosquitto", "-c", str(self.conf)],
+            self.argv(),
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
             preexec_fn=_raise_nofile,
@@ -87,6 +79,7 @@ class Mosquitto:
         return wait_port(self.port)
 
     def signal(self, sig: int) -> None:
+        """Send `sig` to our process, reap it and wait until its port is closed."""
         assert self.popen is not None
         self.popen.send_signal(sig)
         self.popen.wait(timeout=30)
@@ -98,42 +91,51 @@ class Mosquitto:
 
 
 def _raise_nofile() -> None:
+    """Up to 4096 open files (RELIABILITY §0.6: 1024 caps the broker at ~1,000 clients)."""
     import resource
 
     soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
     resource.setrlimit(resource.RLIMIT_NOFILE, (min(4096, hard), hard))
 
 
-class Redis:
+class Mosquitto(_Server):
+    """A broker with persistence saved on every change (RELIABILITY §0.2: SIGKILL keeps QoS 1)."""
+
+    def __init__(self, workdir: Path) -> None:
+        super().__init__(workdir, "mosquitto")
+        _chown(self.dir, "mosquitto")
+        self.conf = self.dir / "mosquitto.conf"
+        self.conf.write_text(
+            f"listener {self.port} 127.0.0.1\nallow_anonymous true\n"
+            f"persistence true\npersistence_location {self.dir}/\n"
+            "autosave_on_changes true\nautosave_interval 1\n"
+            "max_queued_messages 100000\n"
+            f"log_dest file {self.dir}/mosquitto.log\n"
+        )
+
+    @property
+    def url(self) -> str:
+        return f"mqtt://127.0.0.1:{self.port}"
+
+    def argv(self) -> list[str]:
+        return ["mosquitto", "-c", str(self.conf)]
+
+
+class Redis(_Server):
     """redis-server with AOF (everysec) in its own directory."""
 
     def __init__(self, workdir: Path, *, appendonly: bool = True) -> None:
-        self.dir = workdir / "redis"
-        self.dir.mkdir(parents=True, exist_ok=True)
-        self.port = free_port()
+        super().__init__(workdir, "redis")
         self.appendonly = appendonly
-        self.popen: subprocess.Popen[bytes] | None = None
 
     @property
     def url(self) -> str:
         return f"redis://127.0.0.1:{self.port}/0"
 
-    def start(self) -> float:
+    def argv(self) -> list[str]:
         argv = ["redis-server", "--port", str(self.port), "--bind", "127.0.0.1"]
         argv += ["--dir", str(self.dir), "--save", "", "--maxmemory-policy", "noeviction"]
-        argv += ["--appendonly", "yes" if self.appendonly else "no"]
-        self.popen = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        return wait_port(self.port)
-
-    def signal(self, sig: int) -> None:
-        assert self.popen is not None
-        self.popen.send_signal(sig)
-        self.popen.wait(timeout=30)
-        wait_port(self.port, up=False)
-
-    def stop(self) -> None:
-        if self.popen is not None and self.popen.poll() is None:
-            self.signal(signal.SIGTERM)
+        return argv + ["--appendonly", "yes" if self.appendonly else "no"]
 
 
 def _migrations_digest() -> str:
@@ -151,6 +153,17 @@ def _prune_templates(keep: Path) -> None:
             shutil.rmtree(path, ignore_errors=True)
 
 
+def _run_pg(program: str, *args: str, quiet: bool = True) -> None:
+    """Run a PostgreSQL program as the `postgres` user; its output is dropped (its errors too
+    when `quiet`: a server started by `pg_ctl` inherits them and would hold a pipe open)."""
+    subprocess.run(
+        [*_as_user("postgres"), str(PG_BIN / program), *args],
+        check=True,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL if quiet else None,
+    )
+
+
 class Postgres:
     """A PostgreSQL 15 cluster in a temporary directory, migrated (copied from a cached template
     cluster that is initdb'd and migrated once per set of migration files)."""
@@ -165,12 +178,11 @@ class Postgres:
         return f"postgres://postgres@127.0.0.1:{self.port}/fleet"
 
     def _ctl(self, *args: str, data: Path | None = None) -> None:
-        subprocess.run(
-            [*_as_user("postgres"), str(PG_BIN / "pg_ctl"), "-D", str(data or self.dir), *args],
-            check=True,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-        )
+        _run_pg("pg_ctl", "-D", str(data or self.dir), *args)
+
+    def _prepare_socket_dir(self) -> None:
+        self.socket_dir.mkdir(parents=True, exist_ok=True)
+        _chown(self.socket_dir, "postgres")
 
     def _options(self, port: int) -> str:
         return f"-p {port} -k {self.socket_dir} -c fsync=off -c listen_addresses=127.0.0.1"
@@ -179,8 +191,7 @@ class Postgres:
         """Copy the migrated template cluster (making it first if needed)."""
         template = self._template()
         shutil.copytree(template, self.dir, symlinks=True)
-        self.socket_dir.mkdir(parents=True, exist_ok=True)
-        _chown(self.socket_dir, "postgres")
+        self._prepare_socket_dir()
         if os.geteuid() == 0:
             subprocess.run(["chown", "-R", "postgres:postgres", str(self.dir)], check=True)
 
@@ -201,22 +212,16 @@ class Postgres:
         building = Path(tempfile.mkdtemp(dir=TEMPLATE_ROOT, prefix="building-"))
         _chown(building, "postgres")
         data = building / "data"
-        subprocess.run(
-            [*_as_user("postgres"), str(PG_BIN / "initdb"), "-D", str(data), "-A", "trust"],
-            check=True,
-            stdout=subprocess.DEVNULL,
-        )
-        self.socket_dir.mkdir(parents=True, exist_ok=True)
-        _chown(self.socket_dir, "postgres")
+        _run_pg("initdb", "-D", str(data), "-A", "trust", quiet=False)
+        self._prepare_socket_dir()
         port = free_port()
         self._ctl("-o", self._options(port), "-w", "start", data=data)
         try:
-            subprocess.run(
-                [*_as_user("postgres"), str(PG_BIN / "createdb"), "-h", "127.0.0.1"]
-                + ["-p", str(port), "fleet"],
-                check=True,
-            )
+            _run_pg("createdb", "-h", "127.0.0.1", "-p", str(port), "fleet", quiet=False)
             env = {**os.environ, "DATABASE_URL": f"postgres://postgres@127.0.0.1:{port}/fleet"}
+            # The project's settings, even from pytest: tests.settings would point DATABASE_URL
+            # at the shared server (TEST_DATABASE_URL) and migrate that instead.
+            env["DJANGO_SETTINGS_MODULE"] = "fleet.settings"
             env.pop("REDIS_URL", None)
             subprocess.run(
                 [sys.executable, "manage.py", "migrate", "--no-input"],
