@@ -129,3 +129,36 @@ def wait_for(condition: Any, timeout: float, what: str, children: list[Child]) -
                 raise SystemExit(f"{child.name} exited early; see its log")
         time.sleep(1.0)
     raise SystemExit(f"timed out after {timeout:.0f} s waiting for {what}")
+
+
+def order_stages(url: str, timeline: dict[str, list[float | None]]) -> dict[str, Any]:
+    """Where API → published goes, per order the API client posted: POST started → row created
+    (the request), created → assigned (Celery and a dispatch cycle), assigned → first order
+    message seen on MQTT (control's wake-up, plan and publish); p50/p95/max in ms."""
+    from bench.load.probes import ms, percentile
+
+    ids = [int(order_id.removeprefix("TO-")) for order_id in timeline]
+    with psycopg.connect(url, autocommit=True) as connection:
+        rows = connection.execute(
+            "SELECT id, extract(epoch FROM created_at), extract(epoch FROM assigned_at) "
+            "FROM orders_transportorder WHERE id = ANY(%s)",
+            (ids,),
+        ).fetchall()
+    stages: dict[str, list[float]] = {"request": [], "to_assigned": [], "to_published": []}
+    for pk, created, assigned in rows:
+        posted, published = timeline[f"TO-{pk}"]
+        assert posted is not None
+        stages["request"].append(float(created) - posted)
+        if assigned is not None:
+            stages["to_assigned"].append(float(assigned) - float(created))
+            if published is not None:
+                stages["to_published"].append(published - float(assigned))
+    return {
+        f"{name}_{label}_ms": ms(value)
+        for name, samples in stages.items()
+        for label, value in (
+            ("p50", percentile(samples, 0.5)),
+            ("p95", percentile(samples, 0.95)),
+            ("max", max(samples) if samples else None),
+        )
+    }

@@ -36,6 +36,7 @@ from bench.load.processes import (
     create_database,
     db_stats,
     free_ports,
+    order_stages,
     python,
     wait_for,
 )
@@ -258,6 +259,9 @@ def measure(
     for name in ("raw", "api", "ws"):
         path = work / f"{name}.json"
         probe_results[name] = json.loads(path.read_text()) if path.exists() else {"missing": True}
+    timeline = probe_results["api"].pop("timeline", None)
+    if timeline:
+        probe_results["api"]["stages"] = order_stages(db_url, timeline)
     memory = {child.name: child.rss_mb() for child in children}
     return report(args, before, after, probe_results, memory, registered_s, info)
 

@@ -316,6 +316,24 @@ def test_encode_never_writes_null_for_nan() -> None:
         encode(state)
 
 
+def test_encode_with_null_text_but_finite_floats_succeeds() -> None:
+    # "null" in the output sends encode down its slow path (NaN is written as null); a string
+    # saying null and a field left None are no reason to reject the message.
+    state = make_state("2.0.0")
+    state.order_id = "null"
+    state.battery_state.reach = None
+    assert json.loads(encode(state))["orderId"] == "null"
+
+
+def test_encode_reports_non_finite_before_other_encode_errors() -> None:
+    state = make_state("2.0.0")
+    state.order_id = "\ud800"
+    state.battery_state.battery_charge = math.inf
+    with pytest.raises(EncodeError) as info:
+        encode(state)
+    assert info.value.path == "$.batteryState.batteryCharge"
+
+
 def test_encode_rejects_unencodable_strings() -> None:
     state = make_state("2.0.0")
     state.order_id = "\ud800"
