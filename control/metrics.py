@@ -3,12 +3,15 @@
 The hot path only adds to in-memory counters and fixed-bucket histograms (a dict increment
 and a bisect per message); a background thread writes a JSON snapshot to Redis every few
 seconds, so a scrape never touches the paho thread. Counted here: messages by topic kind,
-time spent handling a message, and the latency from a state message's arrival to the order
-(update) it made `control` publish. The controller's own protocol counters (decode errors,
-rejections, sent messages, …) go out with the snapshot as they are.
+time spent handling a message, the latency from a state message's arrival to the order
+(update) it made `control` publish, garbage-collection pauses, and how late a thread that asked
+to run gets to (`wakeup_delay`: what a message waiting in the socket waits while another thread
+holds the GIL). The controller's own protocol counters (decode errors, rejections, sent
+messages, …) go out with the snapshot as they are.
 """
 
 import bisect
+import gc
 import json
 import logging
 import os
@@ -30,6 +33,9 @@ SNAPSHOT_KEY = "fleet:control:metrics"
 SNAPSHOT_INTERVAL = 2.0  # seconds between snapshots in Redis
 # Seconds; Prometheus `le` bounds. Fine at the low end: the target is p99 <= 50 ms.
 LATENCY_BUCKETS = (0.0001, 0.00025, 0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 1.0)
+# Pauses and stalls: up to seconds (a full collection of a large heap, a long plan).
+STALL_BUCKETS = (0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5)
+WAKEUP_PERIOD = 0.02  # s the wake-up probe sleeps between two measurements
 
 
 class Histogram:
@@ -56,6 +62,9 @@ class ControlMetrics:
         self.by_topic: Counter[str] = Counter()
         self.handling = Histogram()
         self.state_to_order = Histogram()
+        self.gc_pause = {"young": Histogram(STALL_BUCKETS), "full": Histogram(STALL_BUCKETS)}
+        self.wakeup_delay = Histogram(STALL_BUCKETS)
+        self._gc_started = 0.0
         self.started = time.time()
         self._current: tuple[int, float] | None = None  # (paho thread, arrival) while handling
         self.link_connected: threading.Event | None = None
@@ -97,6 +106,33 @@ class ControlMetrics:
         link.client.on_message = on_message
         self.controller.publisher.publish = timed_publish
 
+    def watch_pauses(self, until: threading.Event) -> threading.Thread:
+        """Time every garbage collection (young: generations 0-1; full: 2) and, on a daemon
+        thread until `until` is set, how late a sleeping thread wakes up: both stall the paho
+        thread, whose messages wait in the socket meanwhile."""
+        if self._on_gc not in gc.callbacks:
+            gc.callbacks.append(self._on_gc)
+        thread = threading.Thread(
+            target=self._probe_wakeups, args=(until,), name="control-wakeup-probe", daemon=True
+        )
+        thread.start()
+        return thread
+
+    def _on_gc(self, phase: str, info: dict[str, int]) -> None:
+        if phase == "start":
+            self._gc_started = time.perf_counter()
+        else:
+            pause = time.perf_counter() - self._gc_started
+            self.gc_pause["full" if info["generation"] == 2 else "young"].observe(pause)
+
+    def _probe_wakeups(self, until: threading.Event) -> None:
+        clock = time.perf_counter
+        while not until.is_set():
+            asked = clock()
+            time.sleep(WAKEUP_PERIOD)
+            self.wakeup_delay.observe(max(0.0, clock() - asked - WAKEUP_PERIOD))
+        gc.callbacks[:] = [c for c in gc.callbacks if c != self._on_gc]
+
     def snapshot(self) -> dict[str, Any]:
         """Plain data for Redis: counters, histograms and the live fleet by state."""
         controller = self.controller
@@ -117,6 +153,9 @@ class ControlMetrics:
             "messages_by_topic": dict(self.by_topic),
             "handling_seconds": self.handling.as_dict(),
             "state_to_order_seconds": self.state_to_order.as_dict(),
+            "gc_young_pause_seconds": self.gc_pause["young"].as_dict(),
+            "gc_full_pause_seconds": self.gc_pause["full"].as_dict(),
+            "wakeup_delay_seconds": self.wakeup_delay.as_dict(),
             "vehicles": len(vehicles),
             "vehicles_by_link": dict(links),
             "vehicles_executing": executing,

@@ -156,6 +156,22 @@ class FleetCollector:
                     "From a state message's arrival to the order update it made control publish.",
                     "state_to_order_seconds",
                 ),
+                (
+                    "fleet_control_gc_young_pause_seconds",
+                    "Garbage collections of the young generations (0, 1) in control.",
+                    "gc_young_pause_seconds",
+                ),
+                (
+                    "fleet_control_gc_full_pause_seconds",
+                    "Full garbage collections (generation 2) in control.",
+                    "gc_full_pause_seconds",
+                ),
+                (
+                    "fleet_control_wakeup_delay_seconds",
+                    "How late a sleeping thread of control wakes up (waiting for the GIL or a "
+                    "core): what a message waiting in control's socket waits too.",
+                    "wakeup_delay_seconds",
+                ),
             )
             if snapshot.get(key)
         )

@@ -43,6 +43,7 @@ def build_control_loop() -> ControlLoop:
     )
     # One writer per term of leadership: a process that stepped down stops writing its figures.
     start_snapshots(metrics, settings.REDIS_URL, until=loop.finished)
+    metrics.watch_pauses(until=loop.finished)
     observer.start(until=loop.finished)
     return loop
 

@@ -27,6 +27,13 @@ def _delta_histogram_p(
     return None
 
 
+def _count_delta(before: dict[str, Any], after: dict[str, Any], key: str) -> int | None:
+    """Observations of histogram `key` in the window (None: not in the snapshots)."""
+    if key not in before or key not in after:
+        return None
+    return int(sum(after[key]["counts"]) - sum(before[key]["counts"]))
+
+
 def report(
     args: argparse.Namespace,
     before: dict[str, Any],
@@ -68,6 +75,15 @@ def report(
                 c0["state_to_order_seconds"], c1["state_to_order_seconds"], 0.99
             ),
             "vehicles_executing": c1.get("vehicles_executing"),
+            # What stalls the paho thread: the GIL held elsewhere (or no free core), collections.
+            **{
+                f"{name}_{label}_ms_bucket": _delta_histogram_p(
+                    c0.get(f"{name}_seconds", {}), c1.get(f"{name}_seconds", {}), q
+                )
+                for name in ("wakeup_delay", "gc_young_pause", "gc_full_pause")
+                for label, q in (("p50", 0.5), ("p99", 0.99), ("max", 1.0))
+            },
+            "gc_full_collections": _count_delta(c0, c1, "gc_full_pause_seconds"),
         }
     raw = probes["raw"]
     raw_rate = raw.get("messages_per_s") or 0

@@ -1,5 +1,6 @@
 """/metrics: what control counts, how it is rendered for Prometheus, and who may scrape it."""
 
+import gc
 import json
 import logging
 import threading
@@ -82,6 +83,29 @@ def test_messages_are_counted_by_topic_and_orders_sent_from_a_state_are_timed() 
     assert snapshot["vehicles_executing"] == 1
 
 
+def test_collections_and_late_wakeups_are_timed() -> None:
+    _, metrics, _ = _instrumented([])
+    until = threading.Event()
+    probe = metrics.watch_pauses(until)
+    try:
+        gc.collect()  # a full collection
+        gc.collect(0)
+        time.sleep(0.25)  # the probe wakes up every 20 ms
+    finally:
+        until.set()
+        probe.join(timeout=2.0)
+    snapshot = metrics.snapshot()
+    assert sum(snapshot["gc_full_pause_seconds"]["counts"]) >= 1
+    assert sum(snapshot["gc_young_pause_seconds"]["counts"]) >= 1
+    delays = snapshot["wakeup_delay_seconds"]
+    assert sum(delays["counts"]) >= 5
+    assert delays["sum"] >= 0.0
+    assert metrics._on_gc not in gc.callbacks  # removed when the term ends
+    total = sum(sum(snapshot[k]["counts"]) for k in ("gc_full_pause_seconds",))
+    gc.collect()
+    assert sum(metrics.snapshot()["gc_full_pause_seconds"]["counts"]) == total
+
+
 def test_rendering_has_counters_histograms_and_database_gauges() -> None:
     histogram = Histogram((0.001, 0.01))
     histogram.observe(0.0005)
@@ -94,6 +118,8 @@ def test_rendering_has_counters_histograms_and_database_gauges() -> None:
         "messages_by_topic": {"state": 5, "visualization": 2},
         "handling_seconds": histogram.as_dict(),
         "state_to_order_seconds": Histogram((0.001,)).as_dict(),
+        "wakeup_delay_seconds": histogram.as_dict(),
+        "gc_full_pause_seconds": Histogram((0.1,)).as_dict(),
         "vehicles_by_link": {"ONLINE": 3},
         "vehicles_executing": 1,
         "cpu_seconds": 12.5,
@@ -118,6 +144,9 @@ def test_rendering_has_counters_histograms_and_database_gauges() -> None:
     assert samples[(bucket, (("le", "0.001"),))] == 1
     assert samples[(bucket, (("le", "+Inf"),))] == 2
     assert samples[("fleet_control_message_handling_seconds_count", ())] == 2
+    assert samples[("fleet_control_wakeup_delay_seconds_count", ())] == 2
+    assert samples[("fleet_control_gc_full_pause_seconds_count", ())] == 0
+    assert ("fleet_control_gc_young_pause_seconds_count", ()) not in samples  # not in snapshot
     assert samples[("fleet_control_vehicles", (("link", "ONLINE"),))] == 3
     key = (("connection", "ONLINE"), ("operating_mode", "AUTOMATIC"))
     assert samples[("fleet_vehicles", key)] == 3
