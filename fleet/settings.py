@@ -217,6 +217,8 @@ CONTROL_HEALTH_PORT = env.int("CONTROL_HEALTH_PORT", default=8081)
 # control is one long-lived process with two database threads (flush, floor observer): it keeps
 # its connections (seconds) instead of opening one per flush, as DB_CONN_MAX_AGE=0 does.
 CONTROL_DB_CONN_MAX_AGE = env.int("CONTROL_DB_CONN_MAX_AGE", default=300)
+# Allocations between collections of control's youngest generation (Python's default is 700).
+CONTROL_GC_THRESHOLD = env.int("CONTROL_GC_THRESHOLD", default=50_000)
 # Leadership of a standby pair (control/leader.py LeaseTimes, seconds): renew the lease every
 # RENEW_EVERY; publish only within LEASE of the last renewal; the database ends a silent leader's
 # session after SERVER_TIMEOUT; a new leader waits GUARD; a standby polls every RETRY_EVERY; a

@@ -83,6 +83,7 @@ def report(
                 for name in ("wakeup_delay", "gc_young_pause", "gc_full_pause")
                 for label, q in (("p50", 0.5), ("p99", 0.99), ("max", 1.0))
             },
+            "gc_young_collections": _count_delta(c0, c1, "gc_young_pause_seconds"),
             "gc_full_collections": _count_delta(c0, c1, "gc_full_pause_seconds"),
         }
     raw = probes["raw"]

@@ -15,7 +15,6 @@ from control.leader import Leadership, LeaseTimes, conninfo_from_settings
 from control.service import build_control_loop
 from control.standby import StandbyControl
 
-GC_THRESHOLD = 50_000  # allocations between young-generation collections (default 700)
 SWITCH_INTERVAL = 0.001  # s between forced GIL hand-overs
 
 
@@ -39,7 +38,7 @@ class Command(BaseCommand):
         # and collect the young generation less often (a state message allocates dozens of
         # objects; the default threshold ran a collection every few messages).
         gc.freeze()
-        gc.set_threshold(GC_THRESHOLD, 20, 20)
+        gc.set_threshold(settings.CONTROL_GC_THRESHOLD, 20, 20)
         # The paho thread waits for the GIL while the main loop plans or builds rows: a shorter
         # switch interval (default 5 ms) lets it take messages off the socket sooner.
         sys.setswitchinterval(SWITCH_INTERVAL)
