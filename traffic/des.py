@@ -45,6 +45,7 @@ class _Car:
         "rng",
         "task_plan",
         "stalled",
+        "failures",
     )
 
     def __init__(self, name: str, idx: int, rng: random.Random) -> None:
@@ -58,6 +59,7 @@ class _Car:
         self.last_move = 0.0
         self.task_plan = False  # the current route serves the task (not a detour or parking)
         self.stalled = False
+        self.failures = 0  # plans that failed in a row (retries back off)
 
 
 class Simulation:
@@ -153,6 +155,7 @@ class Simulation:
             return
         self.stats.plan_seconds.append(time.perf_counter() - began)
         self.stats.plan_cpu_seconds.append(time.process_time() - cpu)
+        car.failures = 0
         car.task_plan = True
         self._started(car, plan)
 
@@ -174,7 +177,16 @@ class Simulation:
                 car.task_plan = False
                 self._started(car, plan)
                 return
-        self._push(self.now + self.config.retry_after, RETRY, car.idx)
+        self._push(self.now + self._retry_delay(car), RETRY, car.idx)
+
+    def _retry_delay(self, car: _Car) -> float:
+        """Seconds until the next try: `retry_after`, times `retry_backoff` per failure in a row
+        (a goal held far ahead fails the same costly search again and again), at most
+        `retry_max`."""
+        config = self.config
+        delay = config.retry_after * config.retry_backoff**car.failures
+        car.failures += 1
+        return min(delay, max(config.retry_max, config.retry_after))
 
     def _park(self, car: _Car) -> bool:
         try:

@@ -32,6 +32,8 @@ class SimConfig:
     delay_range: tuple[float, float] = (5.0, 30.0)
     seed: int = 0
     retry_after: float = 1.0  # s until a vehicle without a plan tries again
+    retry_backoff: float = 1.0  # the wait grows by this factor per failed plan in a row
+    retry_max: float = 30.0  # s: the longest wait between two tries
     partial: bool = False  # on failure, drive towards the goal as far as possible
     stall_after: float = 300.0  # s without progress while work is left
     check_every: float = 10.0  # s between wait-for-cycle checks
