@@ -26,6 +26,12 @@ def main() -> None:
         choices=["on", "off"],
         help="goal refuges and stepping aside (traffic.aside); default: on for S2, off otherwise",
     )
+    parser.add_argument(
+        "--retime-slack",
+        type=float,
+        default=2.0,
+        help="S1/S3: seconds a plan may run early before tick() re-times it",
+    )
     args = parser.parse_args()
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
@@ -47,6 +53,7 @@ def main() -> None:
                 hours=args.hours,
                 quick_search=bound,
                 lifelong=lifelong,
+                retime_slack=args.retime_slack,
             )
         figures["quick"] = args.quick
         print(f"== {name}")

@@ -87,6 +87,7 @@ def fleet_manager(
     lifelong: bool = False,
     refuge_penalty: float = 0.0,
     replan_after: float = 5.0,
+    retime_slack: float = 2.0,
 ) -> TrafficManager:
     """A manager with vehicles `v0..` standing at `starts` (node id, heading).
 
@@ -103,6 +104,7 @@ def fleet_manager(
         step_aside=lifelong,
         refuge_penalty=refuge_penalty if lifelong else 0.0,
         replan_after=replan_after,
+        retime_slack=retime_slack,
     )
     for i, (node, heading) in enumerate(starts):
         manager.add_vehicle(f"v{i}", node, 0.0, heading=heading)

@@ -42,6 +42,7 @@ def warehouse_scenario(
     max_expansions: int,
     quick_search: tuple[int, float] | None = QUICK_SEARCH,
     lifelong: bool = False,
+    retime_slack: float = 2.0,
 ) -> dict[str, Any]:
     """Vehicles start at distinct workstations and run pick -> drop orders for `hours`.
 
@@ -59,6 +60,7 @@ def warehouse_scenario(
         max_expansions=max_expansions,
         quick_search=quick_search,
         lifelong=lifelong,
+        retime_slack=retime_slack,
     )
     setup = time.perf_counter() - began
     # A vehicle whose tour cannot be planned now tries again after 1, 2, 4, … 30 s: on S3 a drop
@@ -82,6 +84,7 @@ def warehouse_scenario(
         seed=seed,
         quick_search=list(quick_search) if quick_search else None,
         lifelong=lifelong,
+        retime_slack=retime_slack,
         delay="5% of moves +5-30 s",
         setup_s=round(setup, 2),
     )
@@ -95,6 +98,7 @@ def s1(
     hours: float | None = None,
     quick_search: Any = QUICK_SEARCH,
     lifelong: bool = False,
+    retime_slack: float = 2.0,
 ) -> dict[str, Any]:
     """S1: warehouse-10-20-10-2-1 pattern, 100 vehicles (rho >= 0.85, plan p95 <= 25 ms)."""
     grid = warehouse()
@@ -108,6 +112,7 @@ def s1(
         max_expansions=60_000,
         quick_search=quick_search,
         lifelong=lifelong,
+        retime_slack=retime_slack,
     )
 
 
@@ -118,6 +123,7 @@ def s3(
     hours: float | None = None,
     quick_search: Any = QUICK_SEARCH,
     lifelong: bool = False,
+    retime_slack: float = 2.0,
 ) -> dict[str, Any]:
     """S3: 1,000 vehicles on a 500×140 warehouse (targets: rho >= 0.7, plan p95 <= 150 ms)."""
     grid = warehouse(block_cols=36, block_rows=45, margin=51, station_cols=8)
@@ -132,6 +138,7 @@ def s3(
         max_expansions=150_000,
         quick_search=quick_search,
         lifelong=lifelong,
+        retime_slack=retime_slack,
     )
 
 
