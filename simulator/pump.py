@@ -113,8 +113,8 @@ class PumpFleet:
 
     def _write_pending(self, ticked: Sequence[VehicleLink] | None = None) -> None:
         """Write what the just-ticked links published, and what a full socket held back before
-        (asking all 1,000 links after every slice was a fifth of the pump's CPU); with no
-        `ticked`, every link (once a second)."""
+        (asking every link after each of the 200 slices a second was a fifth of the pump's
+        CPU); with no `ticked`, every link (once a second)."""
         links = list(self.registered.values()) if ticked is None else [*ticked, *self.backlog]
         self.backlog = set()
         for link in links:
