@@ -109,7 +109,8 @@ class ControlMetrics:
     def watch_pauses(self, until: threading.Event) -> threading.Thread:
         """Time every garbage collection (young: generations 0-1; full: 2) and, on a daemon
         thread until `until` is set, how late a sleeping thread wakes up: both stall the paho
-        thread, whose messages wait in the socket meanwhile."""
+        thread, whose messages wait in the socket meanwhile. The collector hook goes with the
+        thread."""
         if self._on_gc not in gc.callbacks:
             gc.callbacks.append(self._on_gc)
         thread = threading.Thread(

@@ -183,10 +183,9 @@ class Simulation:
         """Seconds until the next try: `retry_after`, times `retry_backoff` per failure in a row
         (a goal held far ahead fails the same costly search again and again), at most
         `retry_max`."""
-        config = self.config
-        delay = config.retry_after * config.retry_backoff**car.failures
+        delay = self.config.retry_after * self.config.retry_backoff**car.failures
         car.failures += 1
-        return min(delay, max(config.retry_max, config.retry_after))
+        return min(delay, self.config.retry_max)
 
     def _park(self, car: _Car) -> bool:
         try:
