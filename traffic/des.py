@@ -16,8 +16,9 @@ import heapq
 import random
 import time
 from collections.abc import Sequence
+from typing import cast
 
-from traffic.des_records import SimConfig, SimStats, TaskRecord, Tasks
+from traffic.des_records import ReassigningTasks, SimConfig, SimStats, TaskRecord, Tasks
 from traffic.des_watch import StallWatch
 from traffic.manager import NoPlanError, TrafficManager
 from traffic.plans import Goal, Plan, Release
@@ -46,6 +47,7 @@ class _Car:
         "task_plan",
         "stalled",
         "failures",
+        "reassigned",
     )
 
     def __init__(self, name: str, idx: int, rng: random.Random) -> None:
@@ -60,6 +62,7 @@ class _Car:
         self.task_plan = False  # the current route serves the task (not a detour or parking)
         self.stalled = False
         self.failures = 0  # plans that failed in a row (retries back off)
+        self.reassigned = 0  # times the current task got other goals
 
 
 class Simulation:
@@ -134,6 +137,7 @@ class Simulation:
         node = v.route[v.passed]
         car.goals = self.tasks.next_goals(car.name, self.manager.layout.node_ids[node], self.now)
         car.assigned, car.delay = self.now, 0.0
+        car.reassigned = 0
         car.start, car.heading = node, v.headings[v.passed]
         car.last_move = self.now
         if car.goals is None:
@@ -177,7 +181,36 @@ class Simulation:
                 car.task_plan = False
                 self._started(car, plan)
                 return
+        if self._reassign(car):
+            self._push(self.now + self.config.retry_after, RETRY, car.idx)
+            return
         self._push(self.now + self._retry_delay(car), RETRY, car.idx)
+
+    def _reassign(self, car: _Car) -> bool:
+        """After `reassign_after` failed plans in a row, ask the task source for other goals.
+
+        Only for a task not started yet (the vehicle stands where it got it): a drop held
+        far ahead by the plans made before can leave a vehicle's first tour unplannable for
+        minutes, which no retry schedule fixes (S3).
+        """
+        after = self.config.reassign_after
+        if not after or not hasattr(self.tasks, "reassign") or car.goals is None:
+            return False
+        if car.failures + 1 < after:
+            return False
+        v = self.manager.vehicle(car.name)
+        node = v.route[v.passed]
+        if node != car.start or v.passed != len(v.route) - 1:
+            return False
+        source = cast(ReassigningTasks, self.tasks)
+        goals = source.reassign(car.name, car.goals, self.manager.layout.node_ids[node], self.now)
+        if goals is None:
+            return False
+        car.goals = goals
+        car.failures = 0
+        car.reassigned += 1
+        self.stats.reassigned += 1
+        return True
 
     def _retry_delay(self, car: _Car) -> float:
         """Seconds until the next try: `retry_after`, times `retry_backoff` per failure in a row

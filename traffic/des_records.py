@@ -24,6 +24,16 @@ class Tasks(Protocol):
         """The vehicle completed the task with `goals`."""
 
 
+class ReassigningTasks(Tasks, Protocol):
+    """A task source that can give a task whose plan keeps failing other goals (as a WMS would
+    give an order another workstation)."""
+
+    def reassign(
+        self, vehicle_id: str, goals: Sequence[Goal], node: str, now: float
+    ) -> list[Goal] | None:
+        """Other goals for the task with `goals` (not yet started), or None to keep them."""
+
+
 @dataclass
 class SimConfig:
     """Disturbances, fallbacks and safety-net thresholds of a run."""
@@ -34,6 +44,9 @@ class SimConfig:
     retry_after: float = 1.0  # s until a vehicle without a plan tries again
     retry_backoff: float = 1.0  # the wait grows by this factor per failed plan in a row
     retry_max: float = 30.0  # s: the longest wait between two tries
+    # after this many failed plans in a row for a task not yet started, ask the task source
+    # for other goals (`ReassigningTasks.reassign`); 0: never
+    reassign_after: int = 0
     partial: bool = False  # on failure, drive towards the goal as far as possible
     stall_after: float = 300.0  # s without progress while work is left
     check_every: float = 10.0  # s between wait-for-cycle checks
@@ -68,6 +81,7 @@ class SimStats:
     long_waits: int = 0  # no progress for stall_after s behind a vehicle that is driving
     stall_chains: list[str] = field(default_factory=list)  # per stall: its wait-for chain
     plan_failures: int = 0
+    reassigned: int = 0  # tasks given other goals after failed plans (SimConfig.reassign_after)
     moves: int = 0
     delays: int = 0
     waits: list[float] = field(default_factory=list)  # seconds stopped at decision points

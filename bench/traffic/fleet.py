@@ -65,6 +65,24 @@ class WarehouseTasks:
         """The workstation is free for other orders again."""
         self._targeted.discard(goals[-1].node)
 
+    def reassign(
+        self, vehicle_id: str, goals: Sequence[Goal], node: str, now: float
+    ) -> list[Goal] | None:
+        """The plan to this order keeps failing: the same pick, another free workstation.
+
+        (On S3 a drop that the plans made before pass until far ahead left first tours
+        unplannable for minutes; a WMS would send such an order to another workstation.)
+        """
+        pick, drop = goals[0], goals[-1]
+        taken = self._targeted | set(self._untasked.values())
+        choices = [s for s in self.stations if s not in taken and s != node]
+        if not choices:
+            return None
+        self._targeted.discard(drop.node)
+        new = self._stations.choice(choices)
+        self._targeted.add(new)
+        return [pick, Goal(new, drop.dwell)]
+
 
 @dataclass
 class Run:
@@ -188,6 +206,7 @@ def figures(result: Run, *, sample: int = 1500, seed: int = 0) -> dict[str, Any]
         "waits_over_300s_behind_a_driving_vehicle": stats.long_waits,
         "collisions": stats.collisions,
         "plan_failures": stats.plan_failures,
+        "reassigned_orders": stats.reassigned,
         "moves": stats.moves,
         "delayed_moves": stats.delays,
         "plan_ms_p50": _round(_pct(plan_ms, 50)),

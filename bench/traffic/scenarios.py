@@ -30,6 +30,8 @@ S2_REPLAN_AFTER = 1.0
 S2_REPLAN_BUDGET = 40
 # S1/S3: a search over this many expansions is repeated near-greedy (the planning-time tail)
 QUICK_SEARCH = (1_000, 2.0)
+# S1/S3: failed plans in a row before an order not yet started gets another workstation
+REASSIGN_AFTER = 3
 
 
 def warehouse_scenario(
@@ -66,7 +68,11 @@ def warehouse_scenario(
     # A vehicle whose tour cannot be planned now tries again after 1, 2, 4, … 30 s: on S3 a drop
     # held until far ahead failed the full 150,000-expansion search every second (most of the
     # run's CPU). S1 saw one failed plan in 8 h, so its figures do not change.
-    config = SimConfig(seed=seed, finish_at_goal=lifelong, retry_backoff=2.0)
+    # An order whose plan failed REASSIGN_AFTER times in a row before it started goes to another
+    # workstation (S3: first tours whose drop stayed held for minutes were stalls).
+    config = SimConfig(
+        seed=seed, finish_at_goal=lifelong, retry_backoff=2.0, reassign_after=REASSIGN_AFTER
+    )
     seconds = hours * 3600
     tasks = WarehouseTasks(grid, seed, manager.vehicle_ids)
     tasks.standing({f"v{i}": node for i, (node, _) in enumerate(starts)})
