@@ -14,6 +14,7 @@ from control.capabilities import StringLimits
 
 _ID_KEYS = frozenset({"orderId", "nodeId", "edgeId", "actionId", "mapId"})
 _ENUM_KEYS = frozenset({"blockingType", "orientationType", "corridorRefPoint"})
+_CHECKED_KEYS = _ID_KEYS | _ENUM_KEYS | {"loadId"}
 
 
 class ProtocolLimitError(ValueError):
@@ -61,16 +62,25 @@ def _check_string(limits: StringLimits, key: str, value: str) -> None:
 
 
 def _strings(node: Any, key: str = "") -> list[tuple[str, str]]:
-    """(key, value) of every string in a decoded message; action parameters under their key."""
+    """(key, value) of every string in a decoded message that a limit applies to (ids, enums,
+    loadId), in document order; action parameters under their key.
+
+    Iterative, and keeping only what `_check_string` looks at: a long order with its horizon
+    is checked on every update, and the recursive walk that listed every string was a tenth of
+    control's message handling (issue 11)."""
     found: list[tuple[str, str]] = []
-    if isinstance(node, dict):
-        if set(node) == {"key", "value"} and isinstance(node["key"], str):
-            return _strings(node["value"], node["key"])  # an action parameter
-        for child_key, child in node.items():
-            found += _strings(child, child_key)
-    elif isinstance(node, list):
-        for child in node:
-            found += _strings(child, key)
-    elif isinstance(node, str):
-        found.append((key, node))
+    stack: list[tuple[str, Any]] = [(key, node)]
+    while stack:
+        key, node = stack.pop()
+        kind = type(node)
+        if kind is str:
+            if key in _CHECKED_KEYS:
+                found.append((key, node))
+        elif kind is dict:
+            if len(node) == 2 and isinstance(node.get("key"), str) and "value" in node:
+                stack.append((node["key"], node["value"]))  # an action parameter
+            else:
+                stack.extend(reversed(node.items()))
+        elif kind is list:
+            stack.extend((key, child) for child in reversed(node))
     return found

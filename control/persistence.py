@@ -6,6 +6,7 @@ from typing import Any
 
 from django.conf import settings
 from django.db import close_old_connections, transaction
+from django.db.models import QuerySet
 from django.utils.module_loading import import_string
 
 from battery import selectors as battery_selectors
@@ -20,7 +21,7 @@ from maps.models import Edge, Map, Node, Station
 from maps.selectors import edge_speed_limits
 from orders import selectors as order_selectors
 from orders import services as order_services
-from orders.models import TransportOrder
+from orders.models import OrderStep, TransportOrder
 from orders.services import dispatch_queue
 from orders.services import floor as order_floor
 from robots import services as robot_services
@@ -155,39 +156,84 @@ def observe_floor(snapshots: Sequence[Mapping[str, Any]]) -> None:
     maintenance_services.observe_snapshots(snapshots=snapshots)
 
 
-def _transport_orders(orders: Iterable[TransportOrder]) -> list[ActiveOrder]:
+# What control reads of a transport order, every second: plain columns, no model instances
+# (building them with their stations, nodes and steps was half of the 1 s sync, docs/LOAD.md).
+_ORDER_COLUMNS = (
+    *("pk", "vda_order_id", "vehicle_id", "route", "route_steps", "source__node__node_id"),
+    *("source__map__map_id", "source__station_id", "destination__station_id", "load_id"),
+    *("load_type", "cancel_requested"),
+)
+_STEP_COLUMNS = ("order_id", "operation", "action_type", "station__station_id", "parameters")
+
+
+def _transport_orders(orders: QuerySet[TransportOrder]) -> list[ActiveOrder]:
     """Assigned or running transport orders (from `list_active_orders`) as control sees them."""
+    rows = [
+        row
+        for row in orders.prefetch_related(None).values_list(*_ORDER_COLUMNS)
+        if row[2] is not None and row[3]  # a vehicle and a route
+    ]
+    steps = _steps_of([row[0] for row in rows])
     return [
         ActiveOrder(
-            transport_order_id=order.pk,
-            vda_order_id=order.vda_order_id,
-            vehicle_pk=order.vehicle_id,
-            route=list(order.route),
-            pickup_node=order.source.node.node_id,
-            map_id=order.source.map.map_id,
-            pick_station=order.source.station_id,
-            drop_station=order.destination.station_id,
-            load_id=order.load_id,
-            load_type=order.load_type,
-            cancel_requested=order.cancel_requested,
-            steps=_steps(order),
+            transport_order_id=pk,
+            vda_order_id=vda_order_id,
+            vehicle_pk=vehicle_pk,
+            route=list(route),
+            pickup_node=pickup_node,
+            map_id=map_id,
+            pick_station=pick_station,
+            drop_station=drop_station,
+            load_id=load_id,
+            load_type=load_type,
+            cancel_requested=cancel_requested,
+            steps=_step_plans(steps.get(pk, []), route_steps),
         )
-        for order in orders
-        if order.vehicle_id is not None and order.route
+        for (
+            pk,
+            vda_order_id,
+            vehicle_pk,
+            route,
+            route_steps,
+            pickup_node,
+            map_id,
+            pick_station,
+            drop_station,
+            load_id,
+            load_type,
+            cancel_requested,
+        ) in rows
     ]
 
 
-def _steps(order: TransportOrder) -> tuple[StepPlan, ...]:
+def _steps_of(order_ids: list[int]) -> dict[int, list[tuple[Any, ...]]]:
+    """Each order's steps in order, as `_STEP_COLUMNS` rows (in chunks: SQLite's variables)."""
+    found: dict[int, list[tuple[Any, ...]]] = {}
+    for start in range(0, len(order_ids), 500):
+        chunk = order_ids[start : start + 500]
+        rows = OrderStep.objects.filter(order_id__in=chunk).order_by("order_id", "index")
+        for row in rows.values_list(*_STEP_COLUMNS):
+            found.setdefault(row[0], []).append(row)
+    return found
+
+
+def _step_plans(steps: list[tuple[Any, ...]], route_steps: Any) -> tuple[StepPlan, ...]:
     """The order's stops at the route indices dispatch recorded; none for an order assigned
     before steps existed (control then picks at the source and drops at the end)."""
-    steps = list(order.steps.all())
-    indices = list(order.route_steps or [])
+    indices = list(route_steps or [])
     if not steps or len(indices) != len(steps):
         return ()
     return tuple(
-        StepPlan(index, step.vda_action_type, step.station.station_id, dict(step.parameters))
-        for step, index in zip(steps, indices, strict=True)
+        StepPlan(index, _action_type(operation, action_type), station, dict(parameters))
+        for (_, operation, action_type, station, parameters), index in zip(
+            steps, indices, strict=True
+        )
     )
+
+
+def _action_type(operation: str, action_type: str) -> str:
+    """`OrderStep.vda_action_type` from the row's columns."""
+    return action_type if operation == OrderStep.Operation.ACTION else operation.lower()
 
 
 # Jobs the system creates besides transport orders travel as orders with negative ids:

@@ -157,7 +157,7 @@ class ControlLoop:
                     if self.stream_vehicle is not None:
                         for pk, event in self._safely(self.controller.collect_watched) or []:
                             self._safely(self.stream_vehicle, pk, event)
-                    due["BROADCAST_INTERVAL"] = now + self.intervals["BROADCAST_INTERVAL"]
+                    due["BROADCAST_INTERVAL"] = now + self._broadcast_pause(len(rows))
         finally:
             self._receiving.clear()
             receiver.join(timeout=5.0)
@@ -166,6 +166,14 @@ class ControlLoop:
             self.link.stop()
             self.finished.set()
             logger.info("control stopped; counters: %s", dict(self.controller.counters))
+
+    def _broadcast_pause(self, rows: int) -> float:
+        """Seconds to the next broadcast: the interval, stretched so that the rows built per
+        second stay within BROADCAST_ROWS_PER_S (a vehicle changes with each of its messages,
+        so a short interval builds nearly a row per message)."""
+        budget = self.intervals.get("BROADCAST_ROWS_PER_S") or 0.0
+        interval: float = self.intervals["BROADCAST_INTERVAL"]
+        return max(interval, rows / budget) if budget > 0 else interval
 
     def _lost(self) -> bool:
         return self.leadership is not None and self.leadership.lost.is_set()

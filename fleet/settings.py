@@ -195,6 +195,10 @@ VDA5050_INTERFACE = env.str("VDA5050_INTERFACE", default="uagv")
 FLEET_CONTROL = {
     "FLUSH_INTERVAL": env.float("FLEET_FLUSH_INTERVAL", default=1.0),
     "BROADCAST_INTERVAL": env.float("FLEET_BROADCAST_INTERVAL", default=0.2),
+    # Browser rows control builds per second at most: a large fleet's live page is updated less
+    # often than every BROADCAST_INTERVAL (1,000 moving vehicles: about once a second, the rate
+    # of their visualization messages) instead of rebuilding 2,000+ rows a second.
+    "BROADCAST_ROWS_PER_S": env.float("FLEET_BROADCAST_ROWS_PER_S", default=1000.0),
     "SYNC_INTERVAL": env.float("FLEET_SYNC_INTERVAL", default=1.0),
     # How many route nodes ahead of a vehicle are released (its VDA 5050 base); the rest is
     # sent as horizon and released with order updates as the vehicle advances. 0 = all at once.

@@ -1,0 +1,134 @@
+"""The buffered paho client (`fleet.mqtt.BufferedClient`) that control reads the fleet with.
+
+Its socket wrapper is checked on a real socket pair; the client itself over the real
+Mosquitto: every message arrives once, whole and in order, whatever the sizes (a chunk holds
+hundreds of packets; one payload is larger than a chunk), and a handler that publishes on
+every message still gets its publishes out during a burst.
+"""
+
+import socket
+import threading
+import time
+import uuid
+
+import paho.mqtt.client as mqtt
+import pytest
+from django.conf import settings
+from paho.mqtt.enums import CallbackAPIVersion
+
+from fleet.mqtt import READ_CHUNK, _BufferedSocket, make_client
+
+
+def test_the_wrapper_hands_out_what_one_read_got_in_the_sizes_asked_for() -> None:
+    left, right = socket.socketpair()
+    try:
+        right.setblocking(False)
+        wrapped = _BufferedSocket(right)
+        left.sendall(b"\x30\x05hello\x30\x02hi")
+        time.sleep(0.05)
+        assert wrapped.recv(1) == b"\x30"
+        assert wrapped.pending() == 10  # one recv took all of it; paho's loop sees it buffered
+        assert wrapped.recv(1) == b"\x05"
+        assert wrapped.recv(5) == b"hello"
+        assert wrapped.recv(100) == b"\x30\x02hi"  # asked for more: gets what is left
+        assert wrapped.pending() == 0
+        with pytest.raises(BlockingIOError):
+            wrapped.recv(1)  # nothing buffered, nothing in the socket: paho's MQTT_ERR_AGAIN
+        left.close()
+        assert wrapped.recv(1) == b""  # the peer closed: paho's connection lost
+    finally:
+        left.close()
+        right.close()
+
+
+def _broker() -> tuple[str, int]:
+    url = settings.MQTT_URL
+    if settings.SERVICES.get("MQTT_URL", "").startswith("embedded"):
+        pytest.skip("needs a broker (Mosquitto)")
+    _, address = make_client(url, client_id_prefix="probe")
+    return address.host, address.port
+
+
+def _plain_client(host: str, port: int) -> mqtt.Client:
+    client = mqtt.Client(callback_api_version=CallbackAPIVersion.VERSION2)
+    client.connect(host, port)
+    client.loop_start()
+    return client
+
+
+def test_every_message_arrives_whole_and_in_order_through_the_buffered_client() -> None:
+    host, port = _broker()
+    topic = f"buffered/{uuid.uuid4().hex[:8]}"
+    sizes = [10, 1_500, 70, 200_000, 3] * 400 + [READ_CHUNK * 2 + 17]
+    sent = [bytes([i % 251]) * size for i, size in enumerate(sizes)]
+    received: list[bytes] = []
+    done = threading.Event()
+    subscribed = threading.Event()
+
+    client, _ = make_client(settings.MQTT_URL, client_id_prefix="buffered-test")
+
+    def on_message(client: mqtt.Client, userdata: object, message: mqtt.MQTTMessage) -> None:
+        received.append(bytes(message.payload))
+        if len(received) == len(sent):
+            done.set()
+
+    client.on_message = on_message
+    client.on_subscribe = lambda *args: subscribed.set()
+    client.connect(host, port)
+    client.subscribe(topic, qos=1)
+    client.loop_start()
+    sender = _plain_client(host, port)
+    try:
+        assert subscribed.wait(5)
+        for payload in sent:
+            sender.publish(topic, payload, qos=1)
+        assert done.wait(60), f"{len(received)} of {len(sent)} arrived"
+        assert received == sent
+    finally:
+        for each in (client, sender):
+            each.disconnect()
+            each.loop_stop()
+
+
+def test_a_handler_that_publishes_on_every_message_gets_all_its_publishes_out() -> None:
+    host, port = _broker()
+    prefix = f"buffered/{uuid.uuid4().hex[:8]}"
+    count = 3_000
+    replies: list[bytes] = []
+    all_replied = threading.Event()
+    ready = threading.Event()
+
+    client, _ = make_client(settings.MQTT_URL, client_id_prefix="buffered-echo")
+
+    def echo(c: mqtt.Client, userdata: object, message: mqtt.MQTTMessage) -> None:
+        c.publish(f"{prefix}/out", message.payload, qos=0)
+
+    client.on_message = echo
+    client.on_subscribe = lambda *args: ready.set()
+    client.connect(host, port)
+    client.subscribe(f"{prefix}/in", qos=0)
+    client.loop_start()
+
+    listener = _plain_client(host, port)
+    heard = threading.Event()
+
+    def on_reply(c: mqtt.Client, userdata: object, message: mqtt.MQTTMessage) -> None:
+        replies.append(bytes(message.payload))
+        if len(replies) == count:
+            all_replied.set()
+
+    listener.on_message = on_reply
+    listener.on_subscribe = lambda *args: heard.set()
+    listener.subscribe(f"{prefix}/out", qos=0)
+    sender = _plain_client(host, port)
+    try:
+        assert ready.wait(5)
+        assert heard.wait(5)
+        for i in range(count):
+            sender.publish(f"{prefix}/in", str(i).encode(), qos=0)
+        assert all_replied.wait(30), f"{len(replies)} of {count} replies"
+        assert replies == [str(i).encode() for i in range(count)]
+    finally:
+        for each in (client, listener, sender):
+            each.disconnect()
+            each.loop_stop()
