@@ -20,7 +20,9 @@ def build_control_loop() -> ControlLoop:
     """The control loop for the configured broker and interface (not yet running)."""
     # Alerts, inventory, battery and maintenance watch the flushed snapshots on their own
     # thread, so an alert flood never holds up order sync and publishing (issue 11).
-    observer = SnapshotObserver(observe_floor)
+    observer = SnapshotObserver(
+        observe_floor, min_interval=settings.FLEET_CONTROL.get("OBSERVE_INTERVAL", 0.0)
+    )
     controller = Controller(
         store=DjangoStore(observer=observer),
         interface_name=settings.VDA5050_INTERFACE,

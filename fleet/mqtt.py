@@ -102,8 +102,41 @@ class BufferedClient(mqtt.Client):
     held behind a burst of incoming messages.
     """
 
+    _filtered = False  # a per-topic callback was added: paho's own dispatch is needed
+
     def _create_socket(self) -> Any:
         return _BufferedSocket(super()._create_socket())
+
+    def message_callback_add(self, sub: str, callback: Any) -> None:
+        self._filtered = True
+        super().message_callback_add(sub, callback)
+
+    def _handle_publish(self) -> MQTTErrorCode:
+        """A QoS 0 publish of MQTT 3.1.1 straight to `on_message` (the fleet's states and
+        visualizations); everything else (QoS 1 and 2, MQTT 5, per-topic callbacks, a
+        malformed packet) as paho does it. paho's general path decodes, logs and matches the
+        topic against its callback tree for every message: a fifth of control's paho time."""
+        header, data = self._in_packet["command"], self._in_packet["packet"]
+        size = int.from_bytes(data[:2], "big")
+        if header & 0x06 or self._protocol == mqtt.MQTTv5 or self._filtered or size == 0:
+            return super()._handle_publish()
+        if len(data) < 2 + size:
+            return super()._handle_publish()  # paho raises MalformedPacket
+        message = mqtt.MQTTMessage(topic=bytes(data[2 : 2 + size]))
+        message.retain = bool(header & 0x01)
+        message.dup = bool(header & 0x08)
+        message.payload = bytes(data[2 + size :])
+        message.timestamp = mqtt.time_func()
+        on_message = self.on_message
+        if on_message is not None:
+            with self._in_callback_mutex:
+                try:
+                    on_message(self, self._userdata, message)
+                except Exception as err:
+                    self._easy_log(mqtt.MQTT_LOG_ERR, "Caught exception in on_message: %s", err)
+                    if not self.suppress_exceptions:
+                        raise
+        return MQTTErrorCode.MQTT_ERR_SUCCESS
 
     def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
         rc = super().loop_read(max_packets)

@@ -200,6 +200,9 @@ FLEET_CONTROL = {
     # of their visualization messages) instead of rebuilding 2,000+ rows a second.
     "BROADCAST_ROWS_PER_S": env.float("FLEET_BROADCAST_ROWS_PER_S", default=1000.0),
     "SYNC_INTERVAL": env.float("FLEET_SYNC_INTERVAL", default=1.0),
+    # Alerts, inventory, battery and maintenance counters evaluate the flushed snapshots at
+    # most this often (seconds; the newest snapshot per vehicle counts).
+    "OBSERVE_INTERVAL": env.float("FLEET_OBSERVE_INTERVAL", default=2.0),
     # How many route nodes ahead of a vehicle are released (its VDA 5050 base); the rest is
     # sent as horizon and released with order updates as the vehicle advances. 0 = all at once.
     "BASE_AHEAD": env.int("FLEET_BASE_AHEAD", default=3),

@@ -2,6 +2,7 @@
 observer thread, which coalesces them per vehicle and raises the alerts there."""
 
 import threading
+import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -101,3 +102,26 @@ def _wait(condition: Callable[[], bool], timeout: float = 5.0) -> bool:
             return True
         done.wait(0.02)
     return condition()
+
+
+def test_passes_are_at_least_the_minimum_interval_apart_and_coalesce_meanwhile() -> None:
+    passes: list[tuple[float, list[float]]] = []
+    observer = SnapshotObserver(
+        lambda snapshots: passes.append((time.monotonic(), [s["x"] for s in snapshots])),
+        min_interval=0.4,
+    )
+    observer.start()
+    try:
+        observer.submit([{"pk": 1, "x": 1.0}])
+        deadline = time.monotonic() + 5
+        while not passes and time.monotonic() < deadline:
+            time.sleep(0.01)
+        for x in (2.0, 3.0, 4.0):  # three flushes while the observer rests
+            observer.submit([{"pk": 1, "x": x}])
+            time.sleep(0.05)
+        while len(passes) < 2 and time.monotonic() < deadline:
+            time.sleep(0.01)
+    finally:
+        observer.stop()
+    assert [xs for _, xs in passes] == [[1.0], [4.0]]
+    assert passes[1][0] - passes[0][0] >= 0.4

@@ -132,3 +132,47 @@ def test_a_handler_that_publishes_on_every_message_gets_all_its_publishes_out() 
         for each in (client, listener, sender):
             each.disconnect()
             each.loop_stop()
+
+
+def test_the_qos0_fast_path_keeps_paho_s_message_and_survives_a_failing_handler(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    host, port = _broker()
+    general: list[int] = []  # publishes that went paho's general way
+    paho_handle = mqtt.Client._handle_publish
+
+    def counted(self: mqtt.Client) -> object:
+        general.append(1)
+        return paho_handle(self)
+
+    monkeypatch.setattr(mqtt.Client, "_handle_publish", counted)
+    topic = f"buffered/{uuid.uuid4().hex[:8]}/retained"
+    sender = _plain_client(host, port)
+    sender.publish(topic, b"kept", qos=0, retain=True).wait_for_publish(5)
+    seen: list[tuple[str, bytes, bool, int]] = []
+    second = threading.Event()
+    client, _ = make_client(settings.MQTT_URL, client_id_prefix="buffered-fast")
+
+    def on_message(c: mqtt.Client, userdata: object, message: mqtt.MQTTMessage) -> None:
+        seen.append((message.topic, bytes(message.payload), message.retain, message.qos))
+        if len(seen) == 1:
+            raise RuntimeError("a handler bug")  # suppressed (make_client): the loop goes on
+        second.set()
+
+    client.on_message = on_message
+    client.connect(host, port)
+    client.subscribe(topic, qos=0)
+    client.loop_start()
+    try:
+        deadline = time.monotonic() + 5
+        while not seen and time.monotonic() < deadline:
+            time.sleep(0.01)
+        sender.publish(topic, b"live", qos=0)
+        assert second.wait(5)
+        assert seen == [(topic, b"kept", True, 0), (topic, b"live", False, 0)]
+        assert general == []
+    finally:
+        sender.publish(topic, b"", qos=0, retain=True)  # clear the retained message
+        for each in (client, sender):
+            each.disconnect()
+            each.loop_stop()
