@@ -7,7 +7,7 @@
 `traffic.speedups` loads this module when it is built (`make venv`) and current.
 """
 
-import heapq
+from libcpp.vector cimport vector
 
 
 cdef class Hold:
@@ -29,20 +29,84 @@ cdef class Hold:
         )
 
 
+cdef struct Step:
+    # a push in the order of `traffic.timing.propagate_plain`'s tuples (key, -t, vehicle, index)
+    double key  # the step's planned departure before the call
+    double minus  # -t: the largest push of a step first
+    long long vehicle
+    long long index
+
+
+cdef inline bint _before(Step a, Step b) noexcept:
+    if a.key != b.key:
+        return a.key < b.key
+    if a.minus != b.minus:
+        return a.minus < b.minus
+    if a.vehicle != b.vehicle:
+        return a.vehicle < b.vehicle
+    return a.index < b.index
+
+
+cdef void _heap_push(vector[Step]& heap, Step item) noexcept:
+    heap.push_back(item)
+    cdef Py_ssize_t k = heap.size() - 1, parent
+    while k > 0:
+        parent = (k - 1) >> 1
+        if not _before(item, heap[parent]):
+            break
+        heap[k] = heap[parent]
+        k = parent
+    heap[k] = item
+
+
+cdef Step _heap_pop(vector[Step]& heap) noexcept:
+    cdef Step top = heap[0], last = heap.back()
+    heap.pop_back()
+    cdef Py_ssize_t n = heap.size(), k = 0, child
+    if n == 0:
+        return top
+    while True:
+        child = 2 * k + 1
+        if child >= n:
+            break
+        if child + 1 < n and _before(heap[child + 1], heap[child]):
+            child += 1
+        if not _before(heap[child], last):
+            break
+        heap[k] = heap[child]
+        k = child
+    heap[k] = last
+    return top
+
+
+cdef inline void _mark(set marks, tuple conflicts) except *:
+    for r in conflicts:
+        marks.add(r)
+
+
 def propagate(vehicles, table, graphs, pushes):
     """Apply pushes (time, vehicle, index: no departure from that index before time); the
-    number of steps moved. `traffic.timing.propagate`, step for step."""
-    heap = list(pushes)
-    heapq.heapify(heap)
-    pop = heapq.heappop
-    unsorted, stale = table.unsorted, table._stale
+    number of steps moved. `traffic.timing.propagate`, step for step: steps in the order of
+    their departure before the call, the largest push of a step first (a heap of C structs
+    instead of tuples)."""
+    cdef vector[Step] heap
+    cdef Step item, entry
+    cdef list fleet = vehicles
+    cdef set unsorted = table.unsorted, stale = table._stale
+    cdef list blocked = table.blocked
     cdef long long moved = 0, idx, i, last
     cdef double t, arrive, ready
+    for t, idx, i in pushes:
+        item.key, item.minus = fleet[idx].depart[i], -t
+        item.vehicle, item.index = idx, i
+        _heap_push(heap, item)
     cdef Hold edge, node, hold
     cdef list depart, arrivals, edge_holds, node_holds, route
-    while heap:
-        t, idx, i = pop(heap)
-        v = vehicles[idx]
+    cdef dict travel
+    while heap.size():
+        item = _heap_pop(heap)
+        t, idx, i = -item.minus, item.vehicle, item.index
+        v = fleet[idx]
         route, depart = v.route, v.depart
         last = len(route) - 1
         if i >= last or t <= <double>depart[i]:
@@ -59,13 +123,13 @@ def propagate(vehicles, table, graphs, pushes):
                     hold.start = t
                     if not hold.released:  # ReservationTable.retimed
                         hold.key = hold.start
-                        unsorted.update(hold.conflicts)
+                        _mark(unsorted, hold.conflicts)
             arrivals[i + 1] = arrive
             for hold in (edge, <Hold?>node_holds[i]):
                 if hold.end < arrive:
                     hold.end = arrive
-                    stale.update(hold.conflicts)  # ReservationTable.ended
-                    _push_followers(table, hold, idx, heap)
+                    _mark(stale, hold.conflicts)  # ReservationTable.ended
+                    _push_followers(fleet, blocked, unsorted, hold, idx, heap)
             moved += 1
             i += 1
             if i >= last:
@@ -73,7 +137,11 @@ def propagate(vehicles, table, graphs, pushes):
             ready = arrive + _stay(v, graph, i)
             if ready <= <double>depart[i]:
                 break  # a planned wait absorbs the delay
-            t = ready
+            entry.key, entry.minus, entry.vehicle, entry.index = depart[i], -ready, idx, i
+            if heap.size() and _before(heap[0], entry):  # another step comes first
+                _heap_push(heap, entry)
+                break
+            t = ready  # the next step is the next in order: no need to queue it
     return moved
 
 
@@ -87,9 +155,11 @@ cdef double _stay(v, graph, long long i):
     return seconds
 
 
-cdef void _push_followers(table, Hold hold, long long idx, list heap) except *:
+cdef void _push_followers(
+    list fleet, list blocked, set unsorted, Hold hold, long long idx, vector[Step]& heap
+) except *:
     """Push the other vehicles' holds queued behind `hold` that now start before it ends."""
-    cdef list queue = table.blocked[hold.resource]
+    cdef list queue = blocked[hold.resource]
     cdef Py_ssize_t position = -1, k, n = len(queue)
     for k in range(n):
         if queue[k] is hold:
@@ -98,11 +168,16 @@ cdef void _push_followers(table, Hold hold, long long idx, list heap) except *:
     if position < 0:
         return  # already cleared
     cdef double end = hold.end
-    cdef bint ordered = hold.resource not in table.unsorted  # keys ascend: stop at the first >= end
+    cdef bint ordered = hold.resource not in unsorted  # keys ascend: stop at the first >= end
     cdef Hold follower
+    cdef Step item
     for k in range(position + 1, n):
         follower = <Hold?>queue[k]
         if follower.key >= end and ordered:
             break
         if follower.vehicle != idx and not follower.released and follower.start < end:
-            heapq.heappush(heap, (end, follower.vehicle, follower.index - 1))
+            item.index = follower.index - 1
+            item.vehicle = follower.vehicle
+            item.key = fleet[item.vehicle].depart[item.index]
+            item.minus = -end
+            _heap_push(heap, item)

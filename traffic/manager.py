@@ -68,6 +68,7 @@ class TrafficManager(Lifelong):
         weight: float = 1.0,
         replan_after: float = 5.0,
         retime_slack: float = 2.0,
+        retime_growth: float = 0.0,
         quick_search: tuple[int, float] | None = None,
         goal_refuge: bool = False,
         step_aside: bool = False,
@@ -88,6 +89,9 @@ class TrafficManager(Lifelong):
         self.weight = weight  # heuristic weight of SIPP (1: earliest arrival)
         self.replan_after = replan_after  # s at a decision point before tick() re-plans
         self.retime_slack = retime_slack  # s a plan may run early before tick() re-times it
+        # a vehicle s seconds without progress is re-timed growth·s past its earliest departure
+        # (when more than the slack): fewer pushes of long waits (`timing.lower_bounds`)
+        self.retime_growth = retime_growth
         # (expansions, weight): a search that needs more expansions than that at `weight` is
         # repeated with the larger weight (near-greedy), which bounds the planning-time tail
         # in congestion at the price of a later arrival for those few plans
@@ -334,7 +338,7 @@ class TrafficManager(Lifelong):
                     releases.append(release)
         pushes = []
         for v in self._vehicles:
-            bound = lower_bounds(v, self.graphs[v.cls], now, self.retime_slack)
+            bound = lower_bounds(v, self.graphs[v.cls], now, self.retime_slack, self.retime_growth)
             if bound is not None:
                 pushes.append((bound[0], v.idx, bound[1]))
         propagate(self._vehicles, self.table, self.graphs, pushes)

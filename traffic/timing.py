@@ -34,13 +34,20 @@ def stay(v: Vehicle, graph: ClassGraph, i: int) -> float:
     return seconds
 
 
+OVERSHOOT_MAX = 60.0  # s: the most a push with `growth` goes past the earliest departure
+
+
 def lower_bounds(
-    v: Vehicle, graph: ClassGraph, now: float, slack: float = 0.0
+    v: Vehicle, graph: ClassGraph, now: float, slack: float = 0.0, growth: float = 0.0
 ) -> tuple[float, int] | None:
     """The earliest departure from the vehicle's last reported node that is still possible.
 
     None while the plan is at most `slack` seconds too early; otherwise the bound plus `slack`
-    (pushing a little further than needed makes the next push come later).
+    (pushing a little further than needed makes the next push come later). With `growth`,
+    a vehicle that has not reached a node for s seconds is pushed `growth`·s past the bound
+    when that is more than `slack` (at most `OVERSHOOT_MAX`): a long wait is re-timed a few
+    times with growing steps instead of every 2·slack seconds, each push moving its
+    vehicle's whole remaining route and the holds queued behind it.
     """
     p = v.passed
     if v.static or p >= len(v.route) - 1:
@@ -49,7 +56,10 @@ def lower_bounds(
         earliest = now - graph.travel[(v.route[p], v.route[p + 1])]
     else:  # standing at its decision point (waiting, turning or handling)
         earliest = max(now, v.ready_at) + graph.turn(v.headings[p], v.headings[p + 1])
-    return (earliest + slack, p) if earliest > v.depart[p] + slack else None
+    if earliest <= v.depart[p] + slack:
+        return None
+    overshoot = max(slack, min(growth * (now - v.last_progress), OVERSHOOT_MAX))
+    return earliest + overshoot, p
 
 
 def propagate_plain(
@@ -61,12 +71,20 @@ def propagate_plain(
     """Apply pushes (time, vehicle, index: no departure from that index before time).
 
     Returns the number of steps moved. (`propagate` is this or its compiled twin.)
+
+    Steps are taken in the order of their planned departure before this call: every
+    constraint points forward in that order (a vehicle's next step, the holds queued behind a
+    hold), so each step is moved once, by the latest of its pushes. (Taken in the order of
+    the push times instead, a step reached again by a later, larger push was walked again,
+    and with it everything behind it: on S3 2 to 3 times as many moves.) The result is the
+    same in any order: the earliest times that keep every constraint.
     """
-    heap = list(pushes)
+    heap = [(vehicles[idx].depart[i], -t, idx, i) for t, idx, i in pushes]
     heapq.heapify(heap)
     moved = 0
     while heap:
-        t, idx, i = heapq.heappop(heap)
+        _, minus, idx, i = heapq.heappop(heap)
+        t = -minus
         v = vehicles[idx]
         last = len(v.route) - 1
         if i >= last or t <= v.depart[i]:
@@ -86,7 +104,7 @@ def propagate_plain(
                 if hold.end < arrive:
                     hold.end = arrive
                     table.ended(hold)
-                    _push_followers(table, hold, idx, heap)
+                    _push_followers(vehicles, table, hold, idx, heap)
             moved += 1
             i += 1
             if i >= last:
@@ -94,12 +112,20 @@ def propagate_plain(
             ready = arrive + stay(v, graph, i)
             if ready <= v.depart[i]:
                 break  # a planned wait absorbs the delay
-            t = ready
+            entry = (v.depart[i], -ready, idx, i)
+            if heap and heap[0] < entry:  # another step comes first
+                heapq.heappush(heap, entry)
+                break
+            t = ready  # the next step is the next in order: no need to queue it
     return moved
 
 
 def _push_followers(
-    table: ReservationTable, hold: Hold, idx: int, heap: list[tuple[float, int, int]]
+    vehicles: Sequence[Vehicle],
+    table: ReservationTable,
+    hold: Hold,
+    idx: int,
+    heap: list[tuple[float, float, int, int]],
 ) -> None:
     """Push the other vehicles' holds queued behind `hold` that now start before it ends."""
     queue = table.blocked[hold.resource]
@@ -114,7 +140,8 @@ def _push_followers(
         if follower.key >= end and ordered:
             break
         if follower.vehicle != idx and not follower.released and follower.start < end:
-            heapq.heappush(heap, (end, follower.vehicle, follower.index - 1))
+            i = follower.index - 1
+            heapq.heappush(heap, (vehicles[follower.vehicle].depart[i], -end, follower.vehicle, i))
 
 
 propagate = speedups.COMPILED.propagate if speedups.COMPILED else propagate_plain

@@ -32,6 +32,13 @@ def main() -> None:
         default=2.0,
         help="S1/S3: seconds a plan may run early before tick() re-times it",
     )
+    parser.add_argument(
+        "--retime-growth",
+        type=float,
+        default=0.0,
+        help="S1/S3: a vehicle s seconds without progress is re-timed GROWTH*s past its "
+        "earliest departure (fewer pushes of long waits; 0: off)",
+    )
     args = parser.parse_args()
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
@@ -54,6 +61,7 @@ def main() -> None:
                 quick_search=bound,
                 lifelong=lifelong,
                 retime_slack=args.retime_slack,
+                retime_growth=args.retime_growth,
             )
         figures["quick"] = args.quick
         print(f"== {name}")

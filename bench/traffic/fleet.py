@@ -106,6 +106,7 @@ def fleet_manager(
     refuge_penalty: float = 0.0,
     replan_after: float = 5.0,
     retime_slack: float = 2.0,
+    retime_growth: float = 0.0,
 ) -> TrafficManager:
     """A manager with vehicles `v0..` standing at `starts` (node id, heading).
 
@@ -123,6 +124,7 @@ def fleet_manager(
         refuge_penalty=refuge_penalty if lifelong else 0.0,
         replan_after=replan_after,
         retime_slack=retime_slack,
+        retime_growth=retime_growth,
     )
     for i, (node, heading) in enumerate(starts):
         manager.add_vehicle(f"v{i}", node, 0.0, heading=heading)

@@ -45,6 +45,7 @@ def warehouse_scenario(
     quick_search: tuple[int, float] | None = QUICK_SEARCH,
     lifelong: bool = False,
     retime_slack: float = 2.0,
+    retime_growth: float = 0.0,
 ) -> dict[str, Any]:
     """Vehicles start at distinct workstations and run pick -> drop orders for `hours`.
 
@@ -63,6 +64,7 @@ def warehouse_scenario(
         quick_search=quick_search,
         lifelong=lifelong,
         retime_slack=retime_slack,
+        retime_growth=retime_growth,
     )
     setup = time.perf_counter() - began
     # A vehicle whose tour cannot be planned now tries again after 1, 2, 4, … 30 s: on S3 a drop
@@ -91,6 +93,7 @@ def warehouse_scenario(
         quick_search=list(quick_search) if quick_search else None,
         lifelong=lifelong,
         retime_slack=retime_slack,
+        retime_growth=retime_growth,
         delay="5% of moves +5-30 s",
         setup_s=round(setup, 2),
     )
@@ -105,6 +108,7 @@ def s1(
     quick_search: Any = QUICK_SEARCH,
     lifelong: bool = False,
     retime_slack: float = 2.0,
+    retime_growth: float = 0.0,
 ) -> dict[str, Any]:
     """S1: warehouse-10-20-10-2-1 pattern, 100 vehicles (rho >= 0.85, plan p95 <= 25 ms)."""
     grid = warehouse()
@@ -119,6 +123,7 @@ def s1(
         quick_search=quick_search,
         lifelong=lifelong,
         retime_slack=retime_slack,
+        retime_growth=retime_growth,
     )
 
 
@@ -130,6 +135,7 @@ def s3(
     quick_search: Any = QUICK_SEARCH,
     lifelong: bool = False,
     retime_slack: float = 2.0,
+    retime_growth: float = 0.0,
 ) -> dict[str, Any]:
     """S3: 1,000 vehicles on a 500×140 warehouse (targets: rho >= 0.7, plan p95 <= 150 ms)."""
     grid = warehouse(block_cols=36, block_rows=45, margin=51, station_cols=8)
@@ -145,6 +151,7 @@ def s3(
         quick_search=quick_search,
         lifelong=lifelong,
         retime_slack=retime_slack,
+        retime_growth=retime_growth,
     )
 
 
