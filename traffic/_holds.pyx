@@ -95,14 +95,15 @@ def propagate(vehicles, table, graphs, pushes):
     cdef set unsorted = table.unsorted, stale = table._stale
     cdef list blocked = table.blocked
     cdef long long moved = 0, idx, i, last
-    cdef double t, arrive, ready
+    cdef double t, arrive, ready, seconds
     for t, idx, i in pushes:
         item.key, item.minus = fleet[idx].depart[i], -t
         item.vehicle, item.index = idx, i
         _heap_push(heap, item)
     cdef Hold edge, node, hold
-    cdef list depart, arrivals, edge_holds, node_holds, route
+    cdef list depart, arrivals, edge_holds, node_holds, route, headings, goals, stops
     cdef dict travel
+    cdef long long passed, k, h0, h1
     while heap.size():
         item = _heap_pop(heap)
         t, idx, i = -item.minus, item.vehicle, item.index
@@ -114,6 +115,7 @@ def propagate(vehicles, table, graphs, pushes):
         graph = graphs[v.cls]
         travel = graph.travel
         arrivals, edge_holds, node_holds = v.arrive, v.edge_holds, v.node_holds
+        headings, goals, stops, passed = v.headings, v.goals, v.stops, v.passed
         while True:
             depart[i] = t
             arrive = t + <double>travel[(route[i], route[i + 1])]
@@ -134,7 +136,15 @@ def propagate(vehicles, table, graphs, pushes):
             i += 1
             if i >= last:
                 break
-            ready = arrive + _stay(v, graph, i)
+            seconds = 0.0  # the stay at i (`traffic.timing.stay`): turn, then dwells
+            h0, h1 = headings[i], headings[i + 1]
+            if h0 >= 0 and h0 != h1:  # else `graph.turn` is 0
+                seconds = graph.turn(h0, h1)
+            if i > passed:
+                for k in range(len(stops)):
+                    if <long long>stops[k] == i:
+                        seconds += <double>goals[k][1]
+            ready = arrive + seconds
             if ready <= <double>depart[i]:
                 break  # a planned wait absorbs the delay
             entry.key, entry.minus, entry.vehicle, entry.index = depart[i], -ready, idx, i
@@ -143,16 +153,6 @@ def propagate(vehicles, table, graphs, pushes):
                 break
             t = ready  # the next step is the next in order: no need to queue it
     return moved
-
-
-cdef double _stay(v, graph, long long i):
-    """Seconds the vehicle spends at route index i before leaving (`traffic.timing.stay`)."""
-    cdef double seconds = graph.turn(v.headings[i], v.headings[i + 1])
-    cdef long long passed = v.passed
-    for (_, dwell), stop in zip(v.goals, v.stops):
-        if stop == i and i > passed:
-            seconds += dwell
-    return seconds
 
 
 cdef void _push_followers(
