@@ -47,7 +47,6 @@ class _Car:
         "task_plan",
         "stalled",
         "failures",
-        "reassigned",
     )
 
     def __init__(self, name: str, idx: int, rng: random.Random) -> None:
@@ -62,7 +61,6 @@ class _Car:
         self.task_plan = False  # the current route serves the task (not a detour or parking)
         self.stalled = False
         self.failures = 0  # plans that failed in a row (retries back off)
-        self.reassigned = 0  # times the current task got other goals
 
 
 class Simulation:
@@ -137,7 +135,6 @@ class Simulation:
         node = v.route[v.passed]
         car.goals = self.tasks.next_goals(car.name, self.manager.layout.node_ids[node], self.now)
         car.assigned, car.delay = self.now, 0.0
-        car.reassigned = 0
         car.start, car.heading = node, v.headings[v.passed]
         car.last_move = self.now
         if car.goals is None:
@@ -208,7 +205,6 @@ class Simulation:
             return False
         car.goals = goals
         car.failures = 0
-        car.reassigned += 1
         self.stats.reassigned += 1
         return True
 
