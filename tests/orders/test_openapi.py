@@ -73,6 +73,14 @@ def test_docs_are_served_from_the_app_without_a_cdn(api, page) -> None:
         assert Client().get(asset).status_code == 200, asset
 
 
+def test_redoc_may_load_images_from_the_app_only(api) -> None:
+    """The Redoc bundle's footer fetches its logo from cdn.redoc.ly; the page forbids it."""
+    response = api.get("/api/v1/redoc/")
+
+    assert response.status_code == 200
+    assert response["Content-Security-Policy"] == "img-src 'self' data:"
+
+
 def test_schema_and_docs_need_a_login(db) -> None:
     from rest_framework.test import APIClient
 
