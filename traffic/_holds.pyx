@@ -7,6 +7,7 @@
 `traffic.speedups` loads this module when it is built (`make venv`) and current.
 """
 
+from libcpp.algorithm cimport pop_heap, push_heap
 from libcpp.vector cimport vector
 
 
@@ -47,35 +48,19 @@ cdef inline bint _before(Step a, Step b) noexcept:
     return a.index < b.index
 
 
-cdef void _heap_push(vector[Step]& heap, Step item) noexcept:
+cdef inline bint _after(const Step& a, const Step& b) noexcept:
+    return _before(b, a)  # std's heaps keep the largest first: this makes it the earliest
+
+
+cdef inline void _heap_push(vector[Step]& heap, Step item) noexcept:
     heap.push_back(item)
-    cdef Py_ssize_t k = heap.size() - 1, parent
-    while k > 0:
-        parent = (k - 1) >> 1
-        if not _before(item, heap[parent]):
-            break
-        heap[k] = heap[parent]
-        k = parent
-    heap[k] = item
+    push_heap(heap.begin(), heap.end(), &_after)
 
 
-cdef Step _heap_pop(vector[Step]& heap) noexcept:
-    cdef Step top = heap[0], last = heap.back()
+cdef inline Step _heap_pop(vector[Step]& heap) noexcept:
+    pop_heap(heap.begin(), heap.end(), &_after)
+    cdef Step top = heap.back()
     heap.pop_back()
-    cdef Py_ssize_t n = heap.size(), k = 0, child
-    if n == 0:
-        return top
-    while True:
-        child = 2 * k + 1
-        if child >= n:
-            break
-        if child + 1 < n and _before(heap[child + 1], heap[child]):
-            child += 1
-        if not _before(heap[child], last):
-            break
-        heap[k] = heap[child]
-        k = child
-    heap[k] = last
     return top
 
 

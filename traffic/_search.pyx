@@ -8,6 +8,7 @@ computed from the reservation lists once per resource and search, as
 `ReservationTable._between` does. `traffic.speedups` loads it when built and current.
 """
 
+from libcpp.algorithm cimport pop_heap, push_heap
 from libcpp.unordered_map cimport unordered_map
 from libcpp.utility cimport pair
 from libcpp.vector cimport vector
@@ -41,41 +42,19 @@ cdef inline bint before(const Entry& a, const Entry& b) noexcept nogil:
     return a.pushes < b.pushes
 
 
-cdef void heap_push(vector[Entry]& heap, Entry item) noexcept nogil:
+cdef inline bint after(const Entry& a, const Entry& b) noexcept nogil:
+    return before(b, a)  # std's heaps keep the largest first: this makes it the best
+
+
+cdef inline void heap_push(vector[Entry]& heap, Entry item) noexcept nogil:
     heap.push_back(item)
-    cdef size_t i = heap.size() - 1
-    cdef size_t parent
-    while i > 0:
-        parent = (i - 1) >> 1
-        if before(item, heap[parent]):
-            heap[i] = heap[parent]
-            i = parent
-        else:
-            break
-    heap[i] = item
+    push_heap(heap.begin(), heap.end(), &after)
 
 
-cdef Entry heap_pop(vector[Entry]& heap) noexcept nogil:
-    cdef Entry top = heap[0]
-    cdef Entry item = heap.back()
+cdef inline Entry heap_pop(vector[Entry]& heap) noexcept nogil:
+    pop_heap(heap.begin(), heap.end(), &after)
+    cdef Entry top = heap.back()
     heap.pop_back()
-    cdef size_t n = heap.size()
-    cdef size_t i = 0
-    cdef size_t child
-    if n == 0:
-        return top
-    while True:
-        child = 2 * i + 1
-        if child >= n:
-            break
-        if child + 1 < n and before(heap[child + 1], heap[child]):
-            child += 1
-        if before(heap[child], item):
-            heap[i] = heap[child]
-            i = child
-        else:
-            break
-    heap[i] = item
     return top
 
 
