@@ -85,7 +85,7 @@ class Controller(PeriodicWork):
         # `park_idle`: idle vehicles in the way of an order are sent to park (control/parking.py).
         park = (lambda job: self._job_requests.append(job)) if park_idle else None
         fleet = lambda: list(self.fleet.vehicles.values())  # noqa: E731
-        self.traffic = TrafficLink(fleet, park=park) if traffic else None
+        self.traffic = TrafficLink(fleet, park=park, lock=self.lock) if traffic else None
         self.waits = WaitLog()  # traffic waits as episodes, for the reports (control.wait_log)
         self.driver = OrderDriver(
             self.publisher, lambda: self.layouts, base_ahead=base_ahead, traffic=self.traffic

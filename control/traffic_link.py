@@ -13,8 +13,10 @@ id 2·i, as everywhere in `control`.
 """
 
 import logging
+import threading
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -69,8 +71,14 @@ class TrafficLink:
         policy: ReleasePolicy | None = None,
         dwell: float = DWELL,
         park: Callable[[dict[str, Any]], None] | None = None,
+        lock: Any = None,
     ) -> None:
         self.fleet = fleet
+        # The controller's lock (an RLock): a route search lets it go while it runs, so that
+        # state messages are handled meanwhile (TrafficManager.unlocked, `let_go`).
+        self.lock = lock
+        self._letting_go = threading.local()  # .allowed: this thread's search may let go now
+        self._starting: set[str] = set()  # vehicles whose order start is being planned
         # Idle vehicles in the way of an order that finds no plan are sent to park through
         # `park` (a `vehicle.park` job for the flush); None: they stay (control/parking.py).
         self.parking = IdleParking(park) if park is not None else None
@@ -108,6 +116,8 @@ class TrafficLink:
                     quick_search=QUICK_SEARCH,
                     replan_to_base=False,  # a goal's actions cannot move onto the sent base
                 )
+                if self.lock is not None:
+                    self.managers[map_id].unlocked = self._let_go_if_allowed
                 self._indexes[map_id] = index
 
     def _count(self, problem: str) -> None:
@@ -261,17 +271,29 @@ class TrafficLink:
         if tracked.map_id != map_id:
             self._count(f"{name(vehicle)} is on map {tracked.map_id}, order is on {map_id}")
             return None
+        if name(vehicle) in self._starting:
+            return None  # another thread is planning its start (the lock is let go meanwhile)
         manager = self.managers[map_id]
         v = manager.vehicle(name(vehicle))
         here = manager.layout.node_ids[v.route[v.passed]]
         if v.passed != len(v.route) - 1 or here != state.last_node_id:
             self._reset(tracked, state.last_node_id, now)
+        self._starting.add(name(vehicle))
         try:
-            plan = manager.plan(name(vehicle), [Goal(g, self.dwell) for g in goals], now)
+            with self._searches_let_go():
+                plan = manager.plan(name(vehicle), [Goal(g, self.dwell) for g in goals], now)
         except (NoPlanError, KeyError) as exc:
             self._count(f"no plan for {order_id}: {exc!r}")
             if isinstance(exc, NoPlanError) and self.parking is not None:
                 self._clear_way(self.parking, tracked, order_id, goals, now)
+            return None
+        finally:
+            self._starting.discard(name(vehicle))
+        if (
+            self.managers.get(map_id) is not manager
+            or self.tracked.get(name(vehicle)) is not tracked
+        ):
+            # the layout changed while the lock was let go: that manager is gone
             return None
         if self.parking is not None:
             self.parking.planned(name(vehicle))
@@ -362,8 +384,34 @@ class TrafficLink:
             vehicle = tracked.vehicle
             if tracked.static is None and vehicle.session.link(now) is not Link.ONLINE:
                 self._mode_change(tracked, "offline", vehicle.state, now)  # type: ignore[arg-type]
-        for manager in self.managers.values():
-            manager.tick(now)
+        for manager in list(self.managers.values()):
+            with self._searches_let_go():  # its re-plans: state messages go on meanwhile
+                manager.tick(now)
+
+    # -- letting the controller's lock go during a search ---------------------------------------
+    #
+    # A route search takes milliseconds, up to a hundred in congestion (docs/LOAD.md). Only two
+    # callers let the lock go for it: an order's start and the tick's re-plans, each a single
+    # search whose result the manager checks against the table once the lock is back. Searches
+    # inside composite changes (block, restore, re-adoption) keep it: nobody may see those
+    # half done.
+
+    @contextmanager
+    def _searches_let_go(self) -> Iterator[None]:
+        before = getattr(self._letting_go, "allowed", False)
+        self._letting_go.allowed = True
+        try:
+            yield
+        finally:
+            self._letting_go.allowed = before
+
+    @contextmanager
+    def _let_go_if_allowed(self) -> Iterator[None]:
+        if getattr(self._letting_go, "allowed", False):
+            with let_go(self.lock):
+                yield
+        else:
+            yield
 
     # -- for the live page ----------------------------------------------------------------------
 
@@ -388,6 +436,22 @@ class TrafficLink:
         cycles = sum(len(m.wait_cycles()) for m in self.managers.values())
         stalled = sum(len(m.stalled(now)) for m in self.managers.values())
         return {"cycles": cycles, "stalled": stalled}
+
+
+@contextmanager
+def let_go(lock: Any) -> Iterator[None]:
+    """Release `lock`, an RLock this thread may hold (at any depth), for the block.
+
+    Uses the RLock methods `threading.Condition` uses for the same purpose (`_is_owned`,
+    `_release_save`, `_acquire_restore`); a lock without them is kept."""
+    if not getattr(lock, "_is_owned", lambda: False)():
+        yield
+        return
+    saved = lock._release_save()
+    try:
+        yield
+    finally:
+        lock._acquire_restore(saved)
 
 
 def name(vehicle: LiveVehicle) -> str:

@@ -22,6 +22,7 @@ ctypedef pair[long long, double] Link  # parent key, departure (-inf: a dwell)
 cdef double INF = float("inf")
 cdef int SHIFT = 24
 cdef long long UNIT = 1LL << 24
+cdef long long YIELD_EVERY = 64  # expansions between two offers of the GIL (tens of µs)
 
 
 cdef struct Entry:
@@ -105,12 +106,15 @@ cdef class Gaps:
     cdef vector[double]* of(self, long long resource):
         if self.cache.find(resource) != self.cache.end():
             return &self.cache[resource]
+        cdef list holds = <list>self.blocked[resource]
         if resource in self.unsorted:
-            self.table.sort(resource)
+            # a sorted copy: the table is not changed here, as the search may run while
+            # another thread holds the controller's lock (`search(unlocked=...)`)
+            holds = sorted(holds, key=_key)
         cdef vector[double]* flat = &self.cache[resource]
         cdef double free_from = -INF
         cdef Hold hold
-        for item in <list>self.blocked[resource]:
+        for item in holds:
             hold = <Hold?>item
             if hold.vehicle == self.vehicle:
                 continue
@@ -123,6 +127,10 @@ cdef class Gaps:
             flat.push_back(free_from)
             flat.push_back(INF)
         return flat
+
+
+def _key(Hold hold):
+    return hold.key
 
 
 def moves_of(graph):
@@ -198,6 +206,9 @@ def run(p):
         expansions += 1
         if expansions > max_expansions:
             break
+        if expansions % YIELD_EVERY == 0:
+            with nogil:  # let a thread waiting for the GIL (paho's) run now and then
+                pass
         is_outside = s == outside
         u = start if is_outside else m.node_of[s]
         if stage > last + 1:

@@ -22,8 +22,10 @@ lifelong mechanisms (`proceed`, stepping aside) in `traffic.aside`.
 
 from __future__ import annotations
 
+import bisect
 import functools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from contextlib import AbstractContextManager
 from dataclasses import replace
 
 from traffic.aside import Lifelong, through_traffic
@@ -116,6 +118,13 @@ class TrafficManager(Lifelong):
             (e.start, e.end): layout.segment_resource(i) for i, e in enumerate(layout.edges)
         }
         self._length = {(e.start, e.end): e.length for e in layout.edges}
+        # Set by a caller that plans under a lock of its own (control): the search loop then
+        # runs inside `unlocked()`, which lets the lock go, so that other threads' state
+        # messages are handled meanwhile; its path is checked against the table once the lock
+        # is back and searched again, held, if something it relied on changed
+        # (`searches_repeated` counts those).
+        self.unlocked: Callable[[], AbstractContextManager[object]] | None = None
+        self.searches_repeated = 0
 
     # -- fleet ------------------------------------------------------------------------------
 
@@ -232,17 +241,53 @@ class TrafficManager(Lifelong):
         run = functools.partial(
             search, *args, partial=partial, refuge=refuge, refuge_cost=self.refuge_cost
         )
-        if self.quick_search is None:
-            path = run(max_expansions=self.max_expansions, weight=self.weight)
+        if self.unlocked is None:
+            path = self._search(run, None)
         else:
-            cap, fallback = self.quick_search
-            path = run(max_expansions=cap, weight=self.weight)
-            if path is None or not path.complete:
-                path = run(max_expansions=self.max_expansions, weight=fallback) or path
+            before = _planning_state(v)
+            path = self._search(run, self.unlocked)
+            if path is not None and not (_planning_state(v) == before and self._fits(v, path)):
+                # the table or the vehicle changed under the search: again, held this time
+                self.searches_repeated += 1
+                path = self._search(run, None)
         if path is None or (not to_base and path.stops[:1] == [0]):
             return None
         releases = self._commit(v, path, goals, now, hold=refuge)
         return v.snapshot(self.layout, releases)
+
+    def _search(
+        self,
+        run: Callable[..., Path | None],
+        unlocked: Callable[[], AbstractContextManager[object]] | None,
+    ) -> Path | None:
+        """`run` the search, and with `quick_search` once more at its larger weight if the
+        first search found no complete path within its expansions."""
+        if self.quick_search is None:
+            return run(max_expansions=self.max_expansions, weight=self.weight, unlocked=unlocked)
+        cap, fallback = self.quick_search
+        path = run(max_expansions=cap, weight=self.weight, unlocked=unlocked)
+        if path is None or not path.complete:
+            again = run(max_expansions=self.max_expansions, weight=fallback, unlocked=unlocked)
+            path = again or path
+        return path
+
+    def _fits(self, v: Vehicle, path: Path) -> bool:
+        """Whether `path` still fits into the table's gaps from `v`'s decision point: every
+        step's segment and node hold inside a safe interval, and the start left before another
+        vehicle's queued hold there (what the search checked, asked of the table as it is)."""
+        table, me, nodes = self.table, v.idx, path.nodes
+        leave = path.arrive[1] if len(nodes) > 1 else INF
+        if leave > table.first_other_start(nodes[0], me):
+            return False
+        for j in range(1, len(nodes)):
+            enter = path.depart[j - 1]
+            left = path.arrive[j + 1] if j + 1 < len(nodes) else INF
+            segment = self._segment[(nodes[j - 1], nodes[j])]
+            if not _inside(table.safe_intervals(segment, me), enter, path.arrive[j]):
+                return False
+            if not _inside(table.safe_intervals(nodes[j], me), enter, left):
+                return False
+        return True
 
     def _remaining(self, v: Vehicle, graph: ClassGraph) -> float:
         """Seconds the vehicle still needs to its decision point, driving without waiting."""
@@ -355,3 +400,15 @@ class TrafficManager(Lifelong):
             if plan is not None:
                 releases.extend(plan.releases)
         return releases
+
+
+def _planning_state(v: Vehicle) -> tuple[object, ...]:
+    """What a search of `v` starts from (a path searched unlocked is kept only if unchanged)."""
+    return (v.plan_id, v.first_index, v.base, v.passed, len(v.route), v.static, v.ready_at,
+            v.hold_at, v.route[v.base])  # fmt: skip
+
+
+def _inside(gaps: list[tuple[float, float]], start: float, end: float) -> bool:
+    """Whether [start, end] lies within one of `gaps` (sorted, disjoint (from, to) pairs)."""
+    i = bisect.bisect_right(gaps, start, key=lambda gap: gap[0]) - 1
+    return i >= 0 and end <= gaps[i][1]

@@ -22,7 +22,8 @@ from __future__ import annotations
 import math
 from array import array
 from collections import OrderedDict
-from collections.abc import Collection, Sequence
+from collections.abc import Callable, Collection, Sequence
+from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from typing import Any
 
@@ -216,6 +217,7 @@ def search(
     refuge: bool = False,
     avoid: Collection[int] = (),
     refuge_cost: Sequence[float] | None = None,
+    unlocked: Callable[[], AbstractContextManager[object]] | None = None,
 ) -> Path | None:
     """The earliest-arriving path through `goals` (node, dwell) for `vehicle`, or None.
 
@@ -228,6 +230,11 @@ def search(
     (`Path.stops` then holds the goals only); `refuge_cost` (s per node) makes busy nodes worse
     refuges: the refuge minimises arrival plus its cost. The loop runs compiled when
     `traffic._speedups` is built (`make venv`), in plain Python otherwise (same result).
+
+    The compiled loop changes nothing shared and offers the GIL every few dozen expansions, so
+    it runs inside `unlocked()`: the caller may let other threads at the table meanwhile (and
+    must check the path against the table afterwards, `TrafficManager`). The plain loop fills
+    the table's caches as it reads, so it always runs as called.
     """
     tables = graph.tour(goals)
     if refuge:  # the refuge stage (any node will do, no estimate), then refuges by cost
@@ -245,7 +252,11 @@ def search(
         t0, deadline, goals, tables, h_start, partial, max_expansions, weight, refuge,
         avoid, refuge_cost,
     )  # fmt: skip
-    found = LOOP.run(problem)
+    if unlocked is not None and LOOP is not sipp_loop:
+        with unlocked():
+            found = LOOP.run(problem)
+    else:
+        found = LOOP.run(problem)
     if found is None:
         return None
     chain, complete, to_refuge = found
