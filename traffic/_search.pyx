@@ -96,9 +96,11 @@ cdef class Gaps:
     cdef object blocked
     cdef object unsorted
     cdef long long vehicle
+    cdef bint shared
 
-    def __init__(self, table, long long vehicle):
+    def __init__(self, table, long long vehicle, bint shared):
         self.table = table
+        self.shared = shared
         self.blocked = table.blocked
         self.unsorted = table.unsorted
         self.vehicle = vehicle
@@ -108,9 +110,11 @@ cdef class Gaps:
             return &self.cache[resource]
         cdef list holds = <list>self.blocked[resource]
         if resource in self.unsorted:
-            # a sorted copy: the table is not changed here, as the search may run while
-            # another thread holds the controller's lock (`search(unlocked=...)`)
-            holds = sorted(holds, key=_key)
+            if self.shared:  # other threads may use the table: a sorted copy
+                holds = sorted(holds, key=_key)
+            else:
+                self.table.sort(resource)
+                holds = <list>self.blocked[resource]
         cdef vector[double]* flat = &self.cache[resource]
         cdef double free_from = -INF
         cdef Hold hold
@@ -144,7 +148,7 @@ def moves_of(graph):
 def run(p):
     """Search `p` (a `traffic.sipp_loop.Problem`); the chain of the path found, or None."""
     cdef Moves m = moves_of(p.graph)
-    cdef Gaps gaps = Gaps(p.table, p.vehicle)
+    cdef Gaps gaps = Gaps(p.table, p.vehicle, p.shared)
     graph = p.graph
     cost_to = graph.cost_to
     goals_py = p.goals

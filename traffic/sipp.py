@@ -253,6 +253,7 @@ def search(
         avoid, refuge_cost,
     )  # fmt: skip
     if unlocked is not None and LOOP is not sipp_loop:
+        problem.shared = True
         with unlocked():
             found = LOOP.run(problem)
     else:

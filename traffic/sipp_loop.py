@@ -43,6 +43,9 @@ class Problem:
     refuge: bool
     avoid: Collection[int]
     refuge_cost: Sequence[float] | None
+    # The compiled loop runs while other threads may use the table (`search(unlocked=...)`):
+    # it must not sort the table's lists in place then (a sorted copy instead).
+    shared: bool = False
 
 
 def run(p: Problem) -> Found | None:
