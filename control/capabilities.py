@@ -36,6 +36,13 @@ class StringLimits:
     enum_len: int | None = None
     load_id_len: int | None = None
 
+    @property
+    def limits_strings(self) -> bool:
+        """Whether a limit applies to strings inside a message (ids, enums, loadId)."""
+        return self.id_numerical_only or any(
+            limit is not None for limit in (self.id_len, self.enum_len, self.load_id_len)
+        )
+
     @classmethod
     def from_factsheet(cls, lens: vda5050.MaxStringLens) -> "StringLimits":
         # 0 means "no limit" like absent (REFERENCE J.44).

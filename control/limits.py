@@ -43,8 +43,9 @@ def check_message(limits: StringLimits, topic: str, payload: bytes, message: Any
                 raise ProtocolLimitError(
                     f"topic level {level!r} exceeds topicElemLen {limits.topic_elem_len}"
                 )
-    for key, value in _strings(message):
-        _check_string(limits, key, value)
+    if limits.limits_strings:  # most factsheets set none: no walk through every order
+        for key, value in _strings(message):
+            _check_string(limits, key, value)
 
 
 def _check_string(limits: StringLimits, key: str, value: str) -> None:

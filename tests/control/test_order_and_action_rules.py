@@ -168,6 +168,18 @@ def test_J44_an_order_that_breaks_a_string_limit_is_refused_not_sent(
     assert controller.fleet.by_pk(1).execution is None
 
 
+def test_J44_only_limits_on_ids_enums_and_load_ids_make_messages_walked() -> None:
+    assert not StringLimits().limits_strings
+    assert not StringLimits(msg_len=100, topic_serial_len=8, topic_elem_len=8).limits_strings
+    for limits in (
+        StringLimits(id_len=3),
+        StringLimits(id_numerical_only=True),
+        StringLimits(enum_len=3),
+        StringLimits(load_id_len=4),
+    ):
+        assert limits.limits_strings
+
+
 def test_J44_a_refused_message_leaves_no_header_id_gap(controller, sent) -> None:
     controller.handle_message(fakes.topic(), state(header_id=1))
     vehicle = controller.fleet.by_pk(1)
