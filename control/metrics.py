@@ -21,6 +21,7 @@ from collections import Counter
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+import msgspec
 import paho.mqtt.client as mqtt
 
 if TYPE_CHECKING:
@@ -54,6 +55,42 @@ class Histogram:
         return {"bounds": list(self.bounds), "counts": list(self.counts), "sum": self.total}
 
 
+class _Ids(msgspec.Struct):
+    """The ids of a state or an order message that pair them across processes."""
+
+    headerId: int = -1  # noqa: N815 (VDA 5050 field names)
+    orderId: str = ""  # noqa: N815
+    orderUpdateId: int = 0  # noqa: N815
+
+
+class CauseLog:
+    """Which state message made `control` publish each order update (CONTROL_CAUSE_LOG).
+
+    For the load benchmark only (off by default): its probe at the broker times each update
+    from the arrival of the state that caused it, also when that state is another vehicle's
+    (a vehicle waiting for traffic is released by the one it waited for). One JSON line per
+    update: the order topic, orderId, orderUpdateId, and the state's topic and headerId.
+    Written from the paho thread, line-buffered: a few dozen lines a second."""
+
+    def __init__(self, path: str) -> None:
+        self._file = open(path, "a", buffering=1, encoding="utf-8")  # noqa: SIM115 (process-long)
+        self._decode = msgspec.json.Decoder(_Ids).decode
+
+    def record(self, order_topic: str, order: bytes, state_topic: str, state: bytes) -> None:
+        try:
+            update, cause = self._decode(order), self._decode(state)
+        except msgspec.DecodeError:
+            return
+        line = {
+            "order": order_topic,
+            "orderId": update.orderId,
+            "orderUpdateId": update.orderUpdateId,
+            "state": state_topic,
+            "headerId": cause.headerId,
+        }
+        self._file.write(json.dumps(line) + "\n")
+
+
 class ControlMetrics:
     """Messages by topic, handling time and state → order latency of one `control` process."""
 
@@ -67,10 +104,12 @@ class ControlMetrics:
         self._gc_started = 0.0
         self.started = time.time()
         self._current: tuple[int, float] | None = None  # (paho thread, arrival) while handling
+        self._cause: tuple[str, bytes] = ("", b"")  # the state being handled (CauseLog)
         self.link_connected: threading.Event | None = None
 
-    def instrument(self, link: "MqttLink") -> None:
-        """Wrap the link's message callback and the controller's publish function."""
+    def instrument(self, link: "MqttLink", causes: CauseLog | None = None) -> None:
+        """Wrap the link's message callback and the controller's publish function (and with
+        `causes`, log which state made each order update)."""
         handle: Callable[[mqtt.Client, Any, mqtt.MQTTMessage], None] | None
         handle = link.client.on_message
         assert handle is not None, "instrument the link after MqttLink set its callback"
@@ -87,6 +126,8 @@ class ControlMetrics:
             kind = topic[topic.rfind("/") + 1 :]
             by_topic[kind] += 1
             self._current = (thread_id(), arrived) if kind == "state" else None
+            if causes is not None:
+                self._cause = (topic, message.payload)
             try:
                 handle(client, userdata, message)
             finally:
@@ -102,6 +143,8 @@ class ControlMetrics:
                 and current[0] == threading.get_ident()
             ):
                 self.state_to_order.observe(time.perf_counter() - current[1])
+                if causes is not None:
+                    causes.record(topic, payload, *self._cause)
 
         link.client.on_message = on_message
         self.controller.publisher.publish = timed_publish

@@ -6,7 +6,7 @@ from django.conf import settings
 
 from control import snapshots
 from control.controller import Controller
-from control.metrics import ControlMetrics, start_snapshots
+from control.metrics import CauseLog, ControlMetrics, start_snapshots
 from control.observer import SnapshotObserver
 from control.persistence import DjangoStore, observe_floor
 from control.runner import ControlLoop, MqttLink
@@ -34,7 +34,9 @@ def build_control_loop() -> ControlLoop:
     client, address = make_client(settings.MQTT_URL, client_id_prefix="fleet-control")
     link = MqttLink(client, address.host, address.port, controller)
     metrics = ControlMetrics(controller)  # counted in memory, snapshots to Redis for /metrics
-    metrics.instrument(link)
+    metrics.instrument(
+        link, CauseLog(settings.CONTROL_CAUSE_LOG) if settings.CONTROL_CAUSE_LOG else None
+    )
     loop = ControlLoop(
         controller,
         link,

@@ -57,6 +57,7 @@ class _Progress(msgspec.Struct):
 
     lastNodeSequenceId: int = 0  # noqa: N815 (VDA 5050 field names)
     newBaseRequest: bool = False  # noqa: N815
+    headerId: int = -1  # noqa: N815
 
 
 _decode_progress = msgspec.json.Decoder(_Progress).decode
@@ -84,6 +85,10 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
     other_updates = [0]
     unanswered = [0]
     new_orders = [0]
+    # For the causal latency (`_causal`): arrival of every state by (vehicle, headerId), and
+    # of every order message in the window by (vehicle, orderId, orderUpdateId).
+    state_seen: dict[tuple[str, int], float] = {}
+    order_seen: dict[tuple[str, str, int], float] = {}
 
     def on_message(_c: mqtt.Client, _u: Any, message: mqtt.MQTTMessage) -> None:
         now = time.perf_counter()
@@ -95,6 +100,7 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
                 progress = _decode_progress(message.payload)
             except msgspec.DecodeError:
                 return
+            state_seen[(vehicle, progress.headerId)] = now
             moved = progress.lastNodeSequenceId > last_node.get(vehicle, 0)
             last_node[vehicle] = progress.lastNodeSequenceId
             # newBaseRequest stays set while a vehicle waits for traffic: only its rising edge
@@ -107,7 +113,9 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
         elif kind == "order":
             if window["on"]:
                 vehicle = topic[:-6]
-                update = msgspec.json.decode(message.payload).get("orderUpdateId", 0)
+                order = msgspec.json.decode(message.payload)
+                update = order.get("orderUpdateId", 0)
+                order_seen[(vehicle, order.get("orderId", ""), update)] = now
                 asked = asking.get(vehicle)
                 if update == 0:
                     new_orders[0] += 1
@@ -144,6 +152,42 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
         "new_orders": new_orders[0],
         "state_to_update_p50_ms": ms(percentile(latencies, 0.5)),
         "state_to_update_p99_ms": ms(percentile(latencies, 0.99)),
+        **_causal(args.causes, state_seen, order_seen),
+    }
+
+
+def _causal(
+    path: str | None,
+    state_seen: dict[tuple[str, int], float],
+    order_seen: dict[tuple[str, str, int], float],
+) -> dict[str, Any]:
+    """State → update latency by cause: control logs which state made it publish each order
+    update (CONTROL_CAUSE_LOG); each update that arrived here in the window is timed from that
+    state's arrival here. Unlike the heuristic above, an update that releases a vehicle waiting
+    for traffic counts from the other vehicle's state that freed the way, not from the waiting
+    vehicle's own last state. Updates control published without a state (its periodic sync,
+    a new order) have no cause and are not counted."""
+    if not path or not Path(path).exists():
+        return {}
+    latencies: list[float] = []
+    unmatched = 0
+    for line in Path(path).read_text().splitlines():
+        cause = json.loads(line)
+        order = (cause["order"][:-6], cause["orderId"], cause["orderUpdateId"])
+        arrived = order_seen.get(order)
+        if arrived is None:
+            continue  # outside the window
+        asked = state_seen.get((cause["state"][:-6], cause["headerId"]))
+        if asked is None:
+            unmatched += 1
+            continue
+        latencies.append(arrived - asked)
+    return {
+        "caused_updates": len(latencies),
+        "caused_updates_unmatched": unmatched,
+        "state_to_update_causal_p50_ms": ms(percentile(latencies, 0.5)),
+        "state_to_update_causal_p99_ms": ms(percentile(latencies, 0.99)),
+        "state_to_update_causal_max_ms": ms(max(latencies, default=None)),
     }
 
 
@@ -272,6 +316,7 @@ def main() -> None:
     parser.add_argument("--layout", default="")
     parser.add_argument("--rate", type=float, default=1.0)
     parser.add_argument("--fleet", default="", help="JSON [[serial, home station], ...]")
+    parser.add_argument("--causes", default="", help="control's CONTROL_CAUSE_LOG (raw)")
     parser.add_argument("--grace", type=float, default=5.0, help="wait for the last orders")
     args = parser.parse_args()
     result = {"raw": raw, "api": api, "ws": ws}[args.probe](args)

@@ -91,7 +91,8 @@ def report(
     state_rate = raw.get("by_topic_per_s", {}).get("state", 0)
     ratio = round(control["messages_per_s"] / raw_rate, 3) if control and raw_rate else None
     cpu_ratio = round(cpu["control"] / raw["cpu_share"], 2) if raw.get("cpu_share") else None
-    latency_p99 = raw.get("state_to_update_p99_ms")
+    # By cause when control logged causes (probes._causal), else the heuristic pairing.
+    latency_p99 = raw.get("state_to_update_causal_p99_ms", raw.get("state_to_update_p99_ms"))
     api_p95 = probes["api"].get("post_to_published_p95_ms")
     return {
         "config": {

@@ -105,6 +105,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         LOG_LEVEL="WARNING",
         API_CLIENT_RATE="100000/min",
         CONTROL_HEALTH_PORT=str(health_port),
+        CONTROL_CAUSE_LOG=str(work / "causes.jsonl"),  # the causal latency (probes._causal)
     )
     subprocess.run(python("manage.py", "migrate", "-v", "0"), cwd=ROOT, env=env, check=True)
     setup = subprocess.run(
@@ -190,7 +191,16 @@ def measure(
     probes = [
         Child(
             "raw",
-            python("-m", "bench.load.probes", "raw", *common, "--out", str(work / "raw.json")),
+            python(
+                "-m",
+                "bench.load.probes",
+                "raw",
+                *common,
+                "--out",
+                str(work / "raw.json"),
+                "--causes",
+                str(work / "causes.jsonl"),
+            ),
             os.environ.copy(),
             work,
         ),

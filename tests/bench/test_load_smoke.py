@@ -46,6 +46,8 @@ def test_quick_load_run_measures_every_figure(tmp_path: Path) -> None:
     assert figures["cpu_share"]["control"] > 0
     assert figures["control_cpu_vs_raw_subscriber"] is not None
     assert figures["memory_rss_mb"]["control"] > 0
+    assert raw["caused_updates"] > 0  # control's cause log paired with the probe's arrivals
+    assert raw["state_to_update_causal_p99_ms"] is not None
     assert figures["api"]["posted"] > 0
     assert figures["api"]["errors"] == 0
     assert figures["api"]["published"] > 0

@@ -15,7 +15,7 @@ from django.test import Client
 from prometheus_client.parser import text_string_to_metric_families
 
 from control.controller import Controller
-from control.metrics import SNAPSHOT_KEY, ControlMetrics, Histogram
+from control.metrics import SNAPSHOT_KEY, CauseLog, ControlMetrics, Histogram
 from control.prometheus import FleetCollector, render
 from fleet.logging import JsonFormatter
 from robots.models import Vehicle
@@ -30,7 +30,9 @@ def _samples(text: bytes) -> dict[tuple[str, tuple[tuple[str, str], ...]], float
     }
 
 
-def _instrumented(sent: list[tuple[str, bytes]]) -> tuple[Controller, ControlMetrics, Any]:
+def _instrumented(
+    sent: list[tuple[str, bytes]], causes: CauseLog | None = None
+) -> tuple[Controller, ControlMetrics, Any]:
     controller = Controller(
         store=FakeStore(orders=[order()]),
         interface_name="uagv",
@@ -43,8 +45,28 @@ def _instrumented(sent: list[tuple[str, bytes]]) -> tuple[Controller, ControlMet
     )
     link = SimpleNamespace(client=client, connected=threading.Event())
     metrics = ControlMetrics(controller)
-    metrics.instrument(link)  # type: ignore[arg-type]
+    metrics.instrument(link, causes)  # type: ignore[arg-type]
     return controller, metrics, client
+
+
+def test_the_cause_log_names_the_state_behind_each_order_update(tmp_path: Any) -> None:
+    sent: list[tuple[str, bytes]] = []
+    controller, metrics, client = _instrumented(sent, CauseLog(str(tmp_path / "causes.jsonl")))
+    _deliver(client, topic(), state(last_node="a"))
+    controller.sync(controller.store.active_orders())  # the order itself: no state behind it
+    _deliver(client, topic(), state(header_id=2, order_id="TO-7", last_node="b"))
+
+    (update,) = [json.loads(p) for t, p in sent if t.endswith("/order")][1:]
+    lines = [json.loads(line) for line in (tmp_path / "causes.jsonl").read_text().splitlines()]
+    assert lines == [
+        {
+            "order": topic(kind="order"),
+            "orderId": update["orderId"],
+            "orderUpdateId": update["orderUpdateId"],
+            "state": topic(),
+            "headerId": 2,
+        }
+    ]
 
 
 def _deliver(client: Any, topic_text: str, payload: bytes) -> None:
