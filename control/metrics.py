@@ -76,7 +76,9 @@ class CauseLog:
         self._file = open(path, "a", buffering=1, encoding="utf-8")  # noqa: SIM115 (process-long)
         self._decode = msgspec.json.Decoder(_Ids).decode
 
-    def record(self, order_topic: str, order: bytes, state_topic: str, state: bytes) -> None:
+    def record(
+        self, order_topic: str, order: bytes, state_topic: str, state: bytes | bytearray
+    ) -> None:
         try:
             update, cause = self._decode(order), self._decode(state)
         except msgspec.DecodeError:
@@ -104,7 +106,7 @@ class ControlMetrics:
         self._gc_started = 0.0
         self.started = time.time()
         self._current: tuple[int, float] | None = None  # (paho thread, arrival) while handling
-        self._cause: tuple[str, bytes] = ("", b"")  # the state being handled (CauseLog)
+        self._cause: tuple[str, bytes | bytearray] = ("", b"")  # the state handled (CauseLog)
         self.link_connected: threading.Event | None = None
 
     def instrument(self, link: "MqttLink", causes: CauseLog | None = None) -> None:
