@@ -22,7 +22,7 @@ from control.wait_log import WaitLog
 
 logger = logging.getLogger(__name__)
 
-LOCK_CHUNK = 100  # vehicles handled per lock hold in the periodic collections
+LOCK_CHUNK = 25  # vehicles per lock hold in the periodic collections (a few ms each)
 
 
 class PeriodicWork:
