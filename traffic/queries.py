@@ -81,11 +81,13 @@ class FleetQueries:
 
     # -- vehicles out of automatic mode ---------------------------------------------------------
 
-    def block(self, vehicle_id: str, now: float) -> list[str]:
+    def block(self, vehicle_id: str, now: float, *, replan: bool = True) -> list[str]:
         """Make a vehicle a static obstacle (error, manual mode, offline).
 
         Its unreleased steps are dropped, what it holds is held for good, and every vehicle that
-        was queued behind it is re-planned around it. Returns the re-planned vehicles.
+        was queued behind it is re-planned around it. Returns those vehicles. With `replan`
+        False they are only returned: a caller blocking many vehicles at once (a broker outage
+        takes the whole fleet offline) re-plans the ones still moving once, afterwards.
         """
         v = self.vehicle(vehicle_id)
         if v.static:
@@ -107,8 +109,9 @@ class FleetQueries:
                 for other in self.table.blocked[r]:
                     if other.vehicle != v.idx and not other.released:
                         affected[other.vehicle] = None
-        for w in affected:
-            self.replan(self._vehicles[w].name, now)
+        if replan:
+            for w in affected:
+                self.replan(self._vehicles[w].name, now)
         self._waiters.pop(v.idx, None)
         return [self._vehicles[w].name for w in affected]
 

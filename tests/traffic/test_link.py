@@ -8,6 +8,7 @@ import pytest
 import vda5050
 from control.execution import LayoutIndex, NodePlace, OrderExecution, Window
 from control.live import LiveVehicle
+from control.session import Link
 from control.traffic_link import TrafficLink
 from control.traffic_support import (
     DEFAULT_CLASS,
@@ -271,3 +272,28 @@ def test_an_order_that_went_offline_is_planned_again_at_its_decision_point() -> 
     # Progress on the re-adopted order counts with the offset: E1 is route index 3.
     rig.report("A", state("A", "E1", order_id="O-A", seq=6, pending=("E2",)))
     assert rig.link.managers["m"].vehicle("sim/A").passed == 2
+
+
+def test_vehicles_offline_at_once_are_all_blocked_before_those_behind_are_re_planned(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    rig = Rig(("A", "W2"), ("B", "N2"), ("C", "S2"))
+    rig.start("A", ["W2", "W1", "C", "E1", "E2"], "W1")
+    rig.start("B", ["N2", "N1", "C", "E1"], "N1")
+    rig.start("C", ["S2", "S1", "C", "W1"], "S1")  # behind A and B at the crossing
+    manager = rig.link.managers["m"]
+    replanned: list[str] = []
+    replan = manager.replan
+
+    def counting(vehicle_id: str, now: float) -> object:
+        replanned.append(vehicle_id)
+        return replan(vehicle_id, now)
+
+    monkeypatch.setattr(manager, "replan", counting)
+    for serial in ("A", "B"):  # e.g. their connection dropped with the broker
+        monkeypatch.setattr(rig.vehicles[serial].session, "link", lambda now: Link.OFFLINE)
+    rig.link.tick(time.monotonic())
+
+    assert [rig.link.tracked[f"sim/{s}"].static for s in "ABC"] == ["offline", "offline", None]
+    assert replanned.count("sim/C") == 1  # once, after both blocks, not once per block
+    assert not {"sim/A", "sim/B"} & set(replanned)
