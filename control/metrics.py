@@ -189,12 +189,16 @@ class ControlMetrics:
             per_vehicle: Counter[str] = Counter()  # header gaps = messages lost on the way
             for vehicle in vehicles:
                 per_vehicle.update(vehicle.session.counters)
+            counters = dict(controller.counters)
+            if controller.traffic is not None:  # unlocked route searches done again, held
+                managers = controller.traffic.managers.values()
+                counters["traffic_searches_repeated"] = sum(m.searches_repeated for m in managers)
         return {
             "time": time.time(),
             "started": self.started,
             "pid": os.getpid(),
             "broker_connected": bool(self.link_connected and self.link_connected.is_set()),
-            "counters": dict(controller.counters),
+            "counters": counters,
             "vehicle_counters": dict(per_vehicle),
             "messages_by_topic": dict(self.by_topic),
             "handling_seconds": self.handling.as_dict(),

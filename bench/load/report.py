@@ -62,6 +62,8 @@ def report(
             "by_topic_per_s": topics,
             "decode_errors": c1["counters"].get("decode_errors", 0),
             "handler_errors": c1["counters"].get("handler_errors", 0),
+            "traffic_searches_repeated": c1["counters"].get("traffic_searches_repeated", 0)
+            - c0["counters"].get("traffic_searches_repeated", 0),
             "handling_p50_ms": _delta_histogram_p(
                 c0["handling_seconds"], c1["handling_seconds"], 0.5
             ),
