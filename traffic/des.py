@@ -105,6 +105,14 @@ class Simulation:
         self.now = until
         return self.stats
 
+    def open_tasks(self) -> list[tuple[str, tuple[Goal, ...], int, int]]:
+        """Tasks in progress: (vehicle id, goals, node and heading where it was assigned)."""
+        return [
+            (car.name, tuple(car.goals), car.start, car.heading)
+            for car in self._cars
+            if car.goals is not None
+        ]
+
     def _push(self, at: float, kind: int, idx: int) -> None:
         self._seq += 1
         heapq.heappush(self._events, (at, self._seq, kind, idx))

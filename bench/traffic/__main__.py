@@ -18,8 +18,8 @@ def main() -> None:
     parser.add_argument("--tag", default="", help="results file suffix (a shorter run)")
     parser.add_argument(
         "--quick-search",
-        default="1000,2",
-        help="S1/S3: EXPANSIONS,WEIGHT of the bounded first search, or 'off'",
+        help="S1/S3: EXPANSIONS,WEIGHT of the bounded first search, or 'off' (default: "
+        "1000,2 for S1, 1000,1.3 for S3)",
     )
     parser.add_argument(
         "--lifelong",
@@ -50,8 +50,12 @@ def main() -> None:
             )
         else:
             runner = scenarios.s1 if name == "S1" else scenarios.s3
-            bound = None
-            if args.quick_search != "off":
+            bound: tuple[int, float] | None = (
+                scenarios.QUICK_SEARCH if name == "S1" else scenarios.S3_QUICK_SEARCH
+            )
+            if args.quick_search == "off":
+                bound = None
+            elif args.quick_search:
                 cap, weight = args.quick_search.split(",")
                 bound = (int(cap), float(weight))
             figures = runner(
