@@ -118,28 +118,30 @@ class ReservationTable:
         """Mark `hold` entered: nothing may be queued ahead of it any more."""
         if hold.released:
             return
+        key = hold.key
         hold.released, hold.key = True, -INF
         for r in hold.conflicts:
             queue = self.blocked[r]
-            queue.remove(hold)
+            self._drop(queue, r, hold, key)
             queue.insert(0, hold)
             self._gaps.pop(r, None)
 
     def remove(self, hold: Hold) -> None:
         """Drop a hold: cleared by its vehicle, or an unreleased step replanned away."""
         for r in hold.conflicts:
-            queue = self.blocked[r]
-            if r in self.unsorted:
-                queue.remove(hold)
-            else:  # sorted: look among the holds with its key, not along the whole list
-                i = bisect.bisect_left(queue, hold.key, key=_key)
-                while i < len(queue) and queue[i] is not hold and queue[i].key == hold.key:
-                    i += 1
-                if i < len(queue) and queue[i] is hold:
-                    del queue[i]
-                else:
-                    queue.remove(hold)
+            self._drop(self.blocked[r], r, hold, hold.key)
             self._gaps.pop(r, None)
+
+    def _drop(self, queue: list[Hold], resource: int, hold: Hold, key: float) -> None:
+        """Take `hold` (sorted under `key`) out of `queue`, the list of `resource`."""
+        if resource not in self.unsorted:  # sorted: look among the holds with its key only
+            i = bisect.bisect_left(queue, key, key=_key)
+            while i < len(queue) and queue[i] is not hold and queue[i].key == key:
+                i += 1
+            if i < len(queue) and queue[i] is hold:
+                del queue[i]
+                return
+        queue.remove(hold)
 
     def ended(self, hold: Hold) -> None:
         """`hold.end` was changed in place: its lists' safe intervals are stale."""
