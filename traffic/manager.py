@@ -22,7 +22,6 @@ lifelong mechanisms (`proceed`, stepping aside) in `traffic.aside`.
 
 from __future__ import annotations
 
-import bisect
 import functools
 from collections.abc import Callable, Sequence
 from contextlib import AbstractContextManager
@@ -244,9 +243,11 @@ class TrafficManager(Lifelong):
         if self.unlocked is None:
             path = self._search(run, None)
         else:
-            before = _planning_state(v)
+            before, since = _planning_state(v), self.table.clock
             path = self._search(run, self.unlocked)
-            if path is not None and not (_planning_state(v) == before and self._fits(v, path)):
+            if path is not None and not (
+                _planning_state(v) == before and self._fits(v, path, since)
+            ):
                 # the table or the vehicle changed under the search: again, held this time
                 self.searches_repeated += 1
                 path = self._search(run, None)
@@ -271,22 +272,24 @@ class TrafficManager(Lifelong):
             path = again or path
         return path
 
-    def _fits(self, v: Vehicle, path: Path) -> bool:
-        """Whether `path` still fits into the table's gaps from `v`'s decision point: every
-        step's segment and node hold inside a safe interval, and the start left before another
-        vehicle's queued hold there (what the search checked, asked of the table as it is)."""
+    def _fits(self, v: Vehicle, path: Path, since: int) -> bool:
+        """Whether `path`, searched from table clock `since` on, still fits from `v`'s decision
+        point: every step's segment and node hold inside a safe interval, and the start left
+        before another vehicle's queued hold there (what the search checked, asked again of
+        the lists that changed since)."""
         table, me, nodes = self.table, v.idx, path.nodes
         leave = path.arrive[1] if len(nodes) > 1 else INF
-        if leave > table.first_other_start(nodes[0], me):
+        if table.changed_since(nodes[0], since) and leave > table.first_other_start(nodes[0], me):
             return False
         for j in range(1, len(nodes)):
             enter = path.depart[j - 1]
             left = path.arrive[j + 1] if j + 1 < len(nodes) else INF
             segment = self._segment[(nodes[j - 1], nodes[j])]
-            if not _inside(table.safe_intervals(segment, me), enter, path.arrive[j]):
-                return False
-            if not _inside(table.safe_intervals(nodes[j], me), enter, left):
-                return False
+            for resource, end in ((segment, path.arrive[j]), (nodes[j], left)):
+                if table.changed_since(resource, since) and not table.admits(
+                    resource, me, enter, end
+                ):
+                    return False
         return True
 
     def _remaining(self, v: Vehicle, graph: ClassGraph) -> float:
@@ -406,9 +409,3 @@ def _planning_state(v: Vehicle) -> tuple[object, ...]:
     """What a search of `v` starts from (a path searched unlocked is kept only if unchanged)."""
     return (v.plan_id, v.first_index, v.base, v.passed, len(v.route), v.static, v.ready_at,
             v.hold_at, v.route[v.base])  # fmt: skip
-
-
-def _inside(gaps: list[tuple[float, float]], start: float, end: float) -> bool:
-    """Whether [start, end] lies within one of `gaps` (sorted, disjoint (from, to) pairs)."""
-    i = bisect.bisect_right(gaps, start, key=lambda gap: gap[0]) - 1
-    return i >= 0 and end <= gaps[i][1]

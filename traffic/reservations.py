@@ -84,6 +84,11 @@ class ReservationTable:
         # same lists again and again; a vehicle without holds there gets the shared gaps)
         self._gaps: dict[int, tuple[list[tuple[float, float]], set[int]]] = {}
         self._stale: set[int] = set()  # lists whose cached gaps an end change made stale
+        # Changes to the lists, counted (`clock`), and per list the count at its last change:
+        # a search that ran with the table open to other threads checks only the lists that
+        # changed since it started (`changed_since`, `admits`).
+        self.clock = 0
+        self._touched = [0] * resource_count
 
     def sort(self, resource: int) -> None:
         """Restore key order in one list. Re-timing keeps conflicting holds in order, so this
@@ -92,6 +97,7 @@ class ReservationTable:
             self.unsorted.discard(resource)
             self.blocked[resource].sort(key=_key)
             self._gaps.pop(resource, None)
+            self._touch((resource,))
 
     def retimed(self, hold: Hold) -> None:
         """`hold.start` moved later: its lists need sorting before the next SIPP or insert."""
@@ -106,6 +112,7 @@ class ReservationTable:
                 self.sort(r)
             bisect.insort_right(self.blocked[r], hold, key=_key)
             self._gaps.pop(r, None)
+        self._touch(hold.conflicts)
 
     def add_released(self, hold: Hold) -> None:
         """Put a hold the vehicle already occupies (a parked vehicle) at the front."""
@@ -113,6 +120,7 @@ class ReservationTable:
         for r in hold.conflicts:
             self.blocked[r].insert(0, hold)
             self._gaps.pop(r, None)
+        self._touch(hold.conflicts)
 
     def release(self, hold: Hold) -> None:
         """Mark `hold` entered: nothing may be queued ahead of it any more."""
@@ -125,12 +133,14 @@ class ReservationTable:
             self._drop(queue, r, hold, key)
             queue.insert(0, hold)
             self._gaps.pop(r, None)
+        self._touch(hold.conflicts)
 
     def remove(self, hold: Hold) -> None:
         """Drop a hold: cleared by its vehicle, or an unreleased step replanned away."""
         for r in hold.conflicts:
             self._drop(self.blocked[r], r, hold, hold.key)
             self._gaps.pop(r, None)
+        self._touch(hold.conflicts)
 
     def _drop(self, queue: list[Hold], resource: int, hold: Hold, key: float) -> None:
         """Take `hold` (sorted under `key`) out of `queue`, the list of `resource`."""
@@ -142,6 +152,27 @@ class ReservationTable:
                 del queue[i]
                 return
         queue.remove(hold)
+
+    def _touch(self, resources: Sequence[int]) -> None:
+        self.clock += 1
+        for r in resources:
+            self._touched[r] = self.clock
+
+    def changed_since(self, resource: int, clock: int) -> bool:
+        """Whether `resource`'s list may have changed since the table's `clock` read `clock`
+        (re-timing marks a list unsorted or stale without counting: those count as changed)."""
+        return (
+            self._touched[resource] > clock or resource in self.unsorted or resource in self._stale
+        )
+
+    def admits(self, resource: int, vehicle: int, start: float, end: float) -> bool:
+        """Whether `vehicle` may hold `resource` during [start, end]: no other vehicle's hold
+        in its list overlaps it (a released one counts from -inf), i.e. it lies inside one of
+        `safe_intervals(resource, vehicle)`."""
+        for hold in self.blocked[resource]:
+            if hold.vehicle != vehicle and hold.key < end and hold.end > start:
+                return False
+        return True
 
     def ended(self, hold: Hold) -> None:
         """`hold.end` was changed in place: its lists' safe intervals are stale."""
@@ -178,6 +209,7 @@ class ReservationTable:
         if resource in self._stale:
             self._stale.discard(resource)
             self._gaps.pop(resource, None)
+            self._touch((resource,))
         cached = self._gaps.get(resource)
         if cached is None:
             cached = self._gaps[resource] = (

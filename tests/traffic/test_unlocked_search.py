@@ -13,6 +13,8 @@ from contextlib import contextmanager
 from typing import Any
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from control.execution import OrderExecution
 from control.live import LiveVehicle
@@ -23,6 +25,7 @@ from tests.traffic.test_sipp import overlaps
 from traffic import speedups
 from traffic.layout import Layout
 from traffic.manager import TrafficManager
+from traffic.reservations import Hold, ReservationTable
 
 pytestmark = pytest.mark.skipif(
     speedups.COMPILED is None, reason="only the compiled search runs unlocked"
@@ -169,3 +172,36 @@ def _execution(serial: str) -> OrderExecution:
     return OrderExecution.plan(
         transport_order_id=2, vda_order_id=f"O2-{serial}", route=["W2", "W1", "C"], pickup="W1"
     )
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    holds=st.lists(
+        st.tuples(
+            st.integers(0, 3),  # vehicle
+            st.floats(0, 50),  # start
+            st.floats(0, 20),  # length
+            st.booleans(),  # released
+        ),
+        max_size=8,
+    ),
+    start=st.floats(0, 60),
+    length=st.floats(0, 20),
+)
+def test_admits_is_lying_inside_a_safe_interval(holds, start, length) -> None:
+    table = ReservationTable(1)
+    for vehicle, begin, span, released in holds:
+        hold = Hold(vehicle, 0, 0, begin, begin + span, (0,))
+        (table.add_released if released else table.add)(hold)
+    end = start + length
+    inside = any(a <= start and end <= b for a, b in table.safe_intervals(0, 0))
+    assert table.admits(0, 0, start, end) == inside
+
+
+def test_the_table_clock_tells_which_lists_changed() -> None:
+    table = ReservationTable(3)
+    since = table.clock
+    table.add(Hold(1, 0, 0, 0.0, 5.0, (0, 1)))
+    assert table.changed_since(0, since)
+    assert table.changed_since(1, since)
+    assert not table.changed_since(2, since)
