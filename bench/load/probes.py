@@ -15,6 +15,7 @@ the order topic.
 
 import argparse
 import asyncio
+import gc
 import json
 import os
 import random
@@ -52,6 +53,9 @@ def _wait_until(start: float) -> None:
     time.sleep(max(0.0, start - time.time()))
 
 
+STATES_KEPT = 40  # per vehicle, for the causal latency: 20 s of states at 2 a second
+
+
 class _Progress(msgspec.Struct):
     """The two fields of a state that ask the master control for more base."""
 
@@ -87,7 +91,9 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
     new_orders = [0]
     # For the causal latency (`_causal`): arrival of every state by (vehicle, headerId), and
     # of every order message in the window by (vehicle, orderId, orderUpdateId).
-    state_seen: dict[tuple[str, int], float] = {}
+    # Per vehicle, its last STATES_KEPT states (headerId -> arrival): bounded and small, so the
+    # probe itself does not stall on resizing one dict of hundreds of thousands of entries.
+    state_seen: dict[str, dict[int, float]] = {}
     order_seen: dict[tuple[str, str, int], float] = {}
 
     def on_message(_c: mqtt.Client, _u: Any, message: mqtt.MQTTMessage) -> None:
@@ -100,7 +106,10 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
                 progress = _decode_progress(message.payload)
             except msgspec.DecodeError:
                 return
-            state_seen[(vehicle, progress.headerId)] = now
+            seen = state_seen.setdefault(vehicle, {})
+            seen[progress.headerId] = now
+            if len(seen) > STATES_KEPT:
+                del seen[next(iter(seen))]  # the oldest (insertion order)
             moved = progress.lastNodeSequenceId > last_node.get(vehicle, 0)
             last_node[vehicle] = progress.lastNodeSequenceId
             # newBaseRequest stays set while a vehicle waits for traffic: only its rising edge
@@ -133,9 +142,11 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
     client.subscribe(f"{iface}/+/+/+/order", 0)
     client.loop_start()
     _wait_until(args.start)
+    gc.disable()  # a collection would delay the arrival times this probe records
     window["on"], cpu0, t0 = True, time.process_time(), time.perf_counter()
     time.sleep(args.seconds)
     window["on"], cpu1, t1 = False, time.process_time(), time.perf_counter()
+    gc.enable()
     client.disconnect()
     client.loop_stop()
     wall = t1 - t0
@@ -158,7 +169,7 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
 
 def _causal(
     path: str | None,
-    state_seen: dict[tuple[str, int], float],
+    state_seen: dict[str, dict[int, float]],
     order_seen: dict[tuple[str, str, int], float],
 ) -> dict[str, Any]:
     """State → update latency by cause: control logs which state made it publish each order
@@ -177,7 +188,7 @@ def _causal(
         arrived = order_seen.get(order)
         if arrived is None:
             continue  # outside the window
-        asked = state_seen.get((cause["state"][:-6], cause["headerId"]))
+        asked = state_seen.get(cause["state"][:-6], {}).get(cause["headerId"])
         if asked is None:
             unmatched += 1
             continue
