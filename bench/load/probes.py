@@ -53,9 +53,6 @@ def _wait_until(start: float) -> None:
     time.sleep(max(0.0, start - time.time()))
 
 
-STATES_KEPT = 40  # per vehicle, for the causal latency: 20 s of states at 2 a second
-
-
 class _Progress(msgspec.Struct):
     """The two fields of a state that ask the master control for more base."""
 
@@ -91,8 +88,8 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
     new_orders = [0]
     # For the causal latency (`_causal`): arrival of every state by (vehicle, headerId), and
     # of every order message in the window by (vehicle, orderId, orderUpdateId).
-    # Per vehicle, its last STATES_KEPT states (headerId -> arrival): bounded and small, so the
-    # probe itself does not stall on resizing one dict of hundreds of thousands of entries.
+    # Per vehicle, its states' arrivals by headerId: a few hundred entries each, so the probe
+    # does not stall resizing one dict of hundreds of thousands of entries.
     state_seen: dict[str, dict[int, float]] = {}
     order_seen: dict[tuple[str, str, int], float] = {}
 
@@ -106,10 +103,7 @@ def raw(args: argparse.Namespace) -> dict[str, Any]:
                 progress = _decode_progress(message.payload)
             except msgspec.DecodeError:
                 return
-            seen = state_seen.setdefault(vehicle, {})
-            seen[progress.headerId] = now
-            if len(seen) > STATES_KEPT:
-                del seen[next(iter(seen))]  # the oldest (insertion order)
+            state_seen.setdefault(vehicle, {})[progress.headerId] = now
             moved = progress.lastNodeSequenceId > last_node.get(vehicle, 0)
             last_node[vehicle] = progress.lastNodeSequenceId
             # newBaseRequest stays set while a vehicle waits for traffic: only its rising edge
