@@ -13,6 +13,8 @@ from libcpp.unordered_map cimport unordered_map
 from libcpp.utility cimport pair
 from libcpp.vector cimport vector
 
+import operator
+
 import numpy as np
 
 from traffic._holds cimport Hold
@@ -22,6 +24,7 @@ ctypedef pair[long long, double] Link  # parent key, departure (-inf: a dwell)
 cdef double INF = float("inf")
 cdef int SHIFT = 24
 cdef long long UNIT = 1LL << 24
+_key = operator.attrgetter("key")  # a hold's sort key, as ReservationTable sorts by it
 cdef long long YIELD_EVERY = 64  # expansions between two offers of the GIL (tens of µs)
 
 
@@ -131,10 +134,6 @@ cdef class Gaps:
             flat.push_back(free_from)
             flat.push_back(INF)
         return flat
-
-
-def _key(Hold hold):
-    return hold.key
 
 
 def moves_of(graph):
