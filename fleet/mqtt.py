@@ -130,27 +130,91 @@ class BufferedClient(mqtt.Client):
         on_message = self.on_message
         if on_message is not None:
             with self._in_callback_mutex:
-                try:
-                    on_message(self, self._userdata, message)
-                except Exception as err:
-                    self._easy_log(mqtt.MQTT_LOG_ERR, "Caught exception in on_message: %s", err)
-                    if not self.suppress_exceptions:
-                        raise
+                self._deliver(on_message, message)
         return MQTTErrorCode.MQTT_ERR_SUCCESS
 
     def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
-        rc = super().loop_read(max_packets)
-        for _ in range(PACKETS_PER_READ - 1):
-            sock = self._sock
-            if rc != MQTTErrorCode.MQTT_ERR_SUCCESS or not isinstance(sock, _BufferedSocket):
-                break
+        """Handle up to `PACKETS_PER_READ` packets: whole QoS 0 publishes straight from the
+        read buffer, anything else (and the first read of an empty buffer) the paho way."""
+        sock = self._sock
+        if not isinstance(sock, _BufferedSocket):
+            return super().loop_read(max_packets)
+        rc, handled = MQTTErrorCode.MQTT_ERR_SUCCESS, 0
+        while handled < PACKETS_PER_READ:
+            if sock.buffered() and self._in_packet["command"] == 0:
+                direct = self._publishes_from_buffer(sock, PACKETS_PER_READ - handled)
+                handled += direct
+                if direct and (not sock.buffered() or self.want_write()):
+                    break
+                if handled >= PACKETS_PER_READ:
+                    break
             left = sock.buffered()
-            if not left or self.want_write():
-                break
             rc = super().loop_read(max_packets)
-            if sock.buffered() == left:  # a partial packet: the rest is not here yet
+            handled += 1
+            if rc != MQTTErrorCode.MQTT_ERR_SUCCESS or self._sock is not sock:
                 break
+            if not sock.buffered() or sock.buffered() == left or self.want_write():
+                break  # drained, a partial packet (the rest is not here yet), or a write waits
         return rc
+
+    def _publishes_from_buffer(self, sock: _BufferedSocket, limit: int) -> int:
+        """Hand the whole QoS 0 publishes at the head of the read buffer to `on_message`.
+
+        paho reads each packet with four `recv` calls, a dict of reading state and a
+        dispatch on the command: for a fleet's states and visualizations that was a good
+        part of control's paho thread. Stops at anything else (another packet type, QoS 1
+        or 2, a packet not yet whole, a malformed topic length), which paho then reads
+        itself; never with MQTT 5 or per-topic callbacks."""
+        if self._protocol == mqtt.MQTTv5 or self._filtered:
+            return 0
+        buffer, pos, end = sock._buffer, sock._pos, len(sock._buffer)
+        handled = 0
+        on_message = self.on_message
+        with self._in_callback_mutex:
+            while handled < limit and pos + 4 <= end:
+                header = buffer[pos]
+                if header & 0xF6 != 0x30:  # PUBLISH with QoS 0 (dup and retain may be set)
+                    break
+                length, start = _remaining_length(buffer, pos + 1, end)
+                if length < 0 or start + length > end:
+                    break  # not whole yet, or a length paho should judge
+                size = (buffer[start] << 8) | buffer[start + 1]
+                if size == 0 or 2 + size > length:
+                    break  # paho raises MalformedPacket
+                message = mqtt.MQTTMessage(topic=buffer[start + 2 : start + 2 + size])
+                message.retain = bool(header & 0x01)
+                message.dup = bool(header & 0x08)
+                message.payload = buffer[start + 2 + size : start + length]
+                message.timestamp = mqtt.time_func()
+                pos = sock._pos = start + length
+                handled += 1
+                if on_message is not None:
+                    self._deliver(on_message, message)
+        if handled:
+            with self._msgtime_mutex:
+                self._last_bytes_received = mqtt.time_func()
+        return handled
+
+    def _deliver(self, on_message: Any, message: mqtt.MQTTMessage) -> None:
+        try:
+            on_message(self, self._userdata, message)
+        except Exception as err:
+            self._easy_log(mqtt.MQTT_LOG_ERR, "Caught exception in on_message: %s", err)
+            if not self.suppress_exceptions:
+                raise
+
+
+def _remaining_length(buffer: bytes, pos: int, end: int) -> tuple[int, int]:
+    """MQTT's variable-length "remaining length" at `pos`: (length, where the rest starts),
+    or (-1, pos) when it is not all in the buffer or longer than the four bytes allowed."""
+    length, shift = 0, 0
+    for index in range(pos, min(pos + 4, end)):
+        byte = buffer[index]
+        length |= (byte & 0x7F) << shift
+        if not byte & 0x80:
+            return length, index + 1
+        shift += 7
+    return -1, pos
 
 
 def make_client(url: str, *, client_id_prefix: str) -> tuple[mqtt.Client, BrokerAddress]:

@@ -80,8 +80,13 @@ def test_every_message_arrives_whole_and_in_order_through_the_buffered_client() 
     sender = _plain_client(host, port)
     try:
         assert subscribed.wait(5)
-        for payload in sent:
+        for index, payload in enumerate(sent):
             sender.publish(topic, payload, qos=1)
+            # Mosquitto queues at most 1,000 QoS 1 messages for a subscriber that lags and
+            # drops the rest: keep the burst (hundreds of packets a read) under that.
+            deadline = time.monotonic() + 30
+            while index - len(received) > 500 and time.monotonic() < deadline:
+                time.sleep(0.005)
         assert done.wait(60), f"{len(received)} of {len(sent)} arrived"
         assert received == sent
     finally:
@@ -176,3 +181,71 @@ def test_the_qos0_fast_path_keeps_paho_s_message_and_survives_a_failing_handler(
         for each in (client, sender):
             each.disconnect()
             each.loop_stop()
+
+
+def _publish(topic: bytes, payload: bytes, *, qos: int = 0, retain: bool = False) -> bytes:
+    """One MQTT 3.1.1 PUBLISH packet, as the broker writes it."""
+    header = 0x30 | (qos << 1) | int(retain)
+    body = len(topic).to_bytes(2, "big") + topic + (b"\x00\x07" if qos else b"") + payload
+    length, encoded = len(body), bytearray()
+    while True:
+        byte, length = length % 128, length // 128
+        encoded.append(byte | (0x80 if length else 0))
+        if not length:
+            return bytes([header]) + bytes(encoded) + body
+
+
+def test_publishes_whole_in_the_buffer_are_read_from_it_and_the_rest_the_paho_way(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    general: list[int] = []  # packets that went through paho's own reading
+    paho_read = mqtt.Client._packet_read
+
+    def counted(self: mqtt.Client) -> object:
+        general.append(1)
+        return paho_read(self)
+
+    monkeypatch.setattr(mqtt.Client, "_packet_read", counted)
+    client, _ = make_client("mqtt://127.0.0.1:1", client_id_prefix="buffer-parse")
+    seen: list[tuple[str, bytes, bool]] = []
+
+    def on_message(c: mqtt.Client, userdata: object, message: mqtt.MQTTMessage) -> None:
+        seen.append((message.topic, bytes(message.payload), message.retain))
+        if message.payload == b"boom":
+            raise RuntimeError("a handler bug")  # suppressed: the next packets still come
+
+    client.on_message = on_message
+    left, right = socket.socketpair()
+    try:
+        right.setblocking(False)
+        client._sock = _BufferedSocket(right)
+        big = b"x" * 300  # a two-byte remaining length
+        tail = _publish(b"v/split", b"second half")
+        left.sendall(
+            _publish(b"v/a", b"one")
+            + _publish(b"v/b", big, retain=True)
+            + _publish(b"v/c", b"boom")
+            + b"\xd0\x00"  # PINGRESP: paho's
+            + _publish(b"v/d", b"after ping")
+            + tail[:6]
+        )
+        time.sleep(0.05)
+        while client.loop_read() == mqtt.MQTT_ERR_SUCCESS and client._sock.buffered():
+            pass
+        assert seen == [
+            ("v/a", b"one", False),
+            ("v/b", big, True),
+            ("v/c", b"boom", False),
+            ("v/d", b"after ping", False),
+        ]
+        # paho read the first packet (the buffer was empty), the PINGRESP and the part of
+        # the split packet; the publishes whole in the buffer did not go through it
+        assert len(general) == 3
+        left.sendall(tail[6:] + _publish(b"v/e", b"last"))
+        time.sleep(0.05)
+        client.loop_read()
+        assert seen[4:] == [("v/split", b"second half", False), ("v/e", b"last", False)]
+    finally:
+        client._sock = None
+        left.close()
+        right.close()
