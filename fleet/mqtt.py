@@ -67,6 +67,13 @@ class _BufferedSocket:
         self._pos = min(start + size, len(self._buffer))
         return self._buffer[start : self._pos]
 
+    def fill(self) -> int:
+        """Read what the socket has (up to a chunk) into the empty buffer; the bytes read, 0
+        if the broker closed the connection. Raises BlockingIOError when nothing is there."""
+        data: bytes = self._sock.recv(READ_CHUNK)
+        self._buffer, self._pos = data, 0
+        return len(data)
+
     def buffered(self) -> int:
         """Bytes read from the socket that paho has not taken yet."""
         return len(self._buffer) - self._pos
@@ -135,11 +142,19 @@ class BufferedClient(mqtt.Client):
 
     def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
         """Handle up to `PACKETS_PER_READ` packets: whole QoS 0 publishes straight from the
-        read buffer, anything else (and the first read of an empty buffer) the paho way."""
+        read buffer (filled here when empty), anything else the paho way."""
         sock = self._sock
         if not isinstance(sock, _BufferedSocket):
             return super().loop_read(max_packets)
         rc, handled = MQTTErrorCode.MQTT_ERR_SUCCESS, 0
+        if not sock.buffered() and self._in_packet["command"] == 0:
+            try:
+                if not sock.fill():
+                    return super().loop_read(max_packets)  # closed: paho reports the loss
+            except BlockingIOError:
+                return rc
+            except OSError:
+                return super().loop_read(max_packets)  # paho logs and reports it
         while handled < PACKETS_PER_READ:
             if sock.buffered() and self._in_packet["command"] == 0:
                 direct = self._publishes_from_buffer(sock, PACKETS_PER_READ - handled)

@@ -238,9 +238,9 @@ def test_publishes_whole_in_the_buffer_are_read_from_it_and_the_rest_the_paho_wa
             ("v/c", b"boom", False),
             ("v/d", b"after ping", False),
         ]
-        # paho read the first packet (the buffer was empty), the PINGRESP and the part of
-        # the split packet; the publishes whole in the buffer did not go through it
-        assert len(general) == 3
+        # paho read only the PINGRESP and the part of the split packet; the publishes whole
+        # in the buffer did not go through it
+        assert len(general) == 2
         left.sendall(tail[6:] + _publish(b"v/e", b"last"))
         time.sleep(0.05)
         client.loop_read()
