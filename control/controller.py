@@ -66,12 +66,15 @@ class Controller(PeriodicWork):
         park_idle: bool = True,
         liveness_probe_after: float = PROBE_AFTER,
         liveness_probe_grace: float = PROBE_GRACE,
+        motion_flush_interval: float = 0.0,
     ) -> None:
         self.store = store
         self.interface_name = interface_name
         self.fleet = Fleet()
         # A vehicle silent this long gets one stateRequest (0 = never; control.session).
         self.probe_after, self.probe_grace = liveness_probe_after, liveness_probe_grace
+        # A snapshot whose only change is motion is written at most this often (seconds).
+        self.motion_flush_interval = motion_flush_interval
         self.layouts: dict[str, LayoutIndex] = {}
         self.counters: Counter[str] = Counter()
         self._topics: dict[str, Topic] = {}  # topic text -> parsed (see _parse_topic)

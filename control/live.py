@@ -66,6 +66,10 @@ class LiveVehicle:
     answered_retriable: dict[str, float] = field(default_factory=dict)  # id -> monotonic
     cleared_at: float = float("-inf")
     needs_flush: bool = True
+    # What its last snapshot row said besides motion (snapshots.material), and when it was
+    # written (monotonic): a change of motion alone waits for the motion flush interval.
+    flushed_material: tuple[Any, ...] | None = field(default=None, repr=False, compare=False)
+    flushed_at: float = float("-inf")
     needs_broadcast: bool = True
     was_available: bool = False
     last_link: Link = Link.UNKNOWN

@@ -39,6 +39,7 @@ class PeriodicWork:
     waits: WaitLog
     probe_after: float
     probe_grace: float
+    motion_flush_interval: float
     counters: Any
     _unflushed_outcomes: list[InstantActionTrack]
     _job_requests: list[dict[str, Any]]
@@ -86,10 +87,19 @@ class PeriodicWork:
         vehicle.command_outcomes = []
         if not vehicle.needs_flush:
             return
-        vehicle.needs_flush = False
         if vehicle.pk is None:
+            vehicle.needs_flush = False
             batch.new_vehicles.append(vehicle)
             return
+        material = snapshots.material(vehicle)
+        if (
+            material == vehicle.flushed_material
+            and now - vehicle.flushed_at < self.motion_flush_interval
+            and not vehicle.factsheet_changed
+        ):
+            return  # only motion changed: written with a later flush (still marked)
+        vehicle.needs_flush = False
+        vehicle.flushed_material, vehicle.flushed_at = material, now
         batch.snapshots.append(snapshots.row(vehicle))
         if vehicle.factsheet_changed and vehicle.factsheet is not None:
             batch.factsheets[vehicle.pk] = vehicle.factsheet
@@ -144,9 +154,11 @@ class PeriodicWork:
             self._unflushed_outcomes[:0] = batch.command_outcomes
             self._job_requests[:0] = batch.job_requests
             self.waits.finished[:0] = batch.traffic_waits
+            unwritten = {snapshot["pk"] for snapshot in batch.snapshots}
             for vehicle in self.fleet.vehicles.values():
-                if vehicle.pk is None or vehicle.pk in {s["pk"] for s in batch.snapshots}:
+                if vehicle.pk is None or vehicle.pk in unwritten:
                     vehicle.needs_flush = True
+                    vehicle.flushed_material = None  # not written: goes with the next flush
                 if vehicle.pk in batch.factsheets:
                     vehicle.factsheet_changed = True
 

@@ -30,6 +30,7 @@ def build_control_loop() -> ControlLoop:
         traffic=settings.FLEET_CONTROL["TRAFFIC"],
         park_idle=settings.FLEET_CONTROL.get("TRAFFIC_PARK_IDLE", True),
         liveness_probe_after=settings.FLEET_CONTROL.get("LIVENESS_PROBE_AFTER", PROBE_AFTER),
+        motion_flush_interval=settings.FLEET_CONTROL.get("MOTION_FLUSH_INTERVAL", 0.0),
     )
     client, address = make_client(settings.MQTT_URL, client_id_prefix="fleet-control")
     link = MqttLink(client, address.host, address.port, controller)

@@ -61,6 +61,22 @@ def row(vehicle: LiveVehicle) -> dict[str, Any]:
     }
 
 
+def material(vehicle: LiveVehicle) -> tuple[Any, ...]:
+    """What of a vehicle's snapshot other processes act on: dispatch (availability, mode,
+    errors, loads, the order it drives), alerts and the stale-assignment check. Position,
+    last node, battery charge and `last_seen` are left out: while a vehicle drives they change
+    with every state, and only pages and counters read them from the database."""
+    state, position = vehicle.state, vehicle.visual_position
+    placed = (position.map_id, bool(position.position_initialized)) if position else None
+    if state is None:
+        return (vehicle.connection, vehicle.version, placed)
+    return (
+        *(vehicle.connection, vehicle.version, placed, state.driving, state.paused),
+        *(state.operating_mode, state.battery_state.charging, state.errors, state.loads),
+        *(state.order_id, state.order_update_id),
+    )
+
+
 def status_label(vehicle: LiveVehicle) -> str:
     """One word for the page's colour: offline, error, paused, charging, driving, busy, idle."""
     return _status(vehicle, vehicle.connection)

@@ -729,3 +729,43 @@ def test_A6_max_speed_goes_out_only_to_vehicles_whose_factsheet_supports_it(
     (message,) = orders_in(sent)
     speeds = [e.get("maxSpeed", e.get("maximumSpeed")) for e in message["edges"]]
     assert speeds == [None, 0.5, None]
+
+
+def test_a_change_of_motion_alone_is_written_at_the_motion_interval_any_other_at_once(
+    sent, monkeypatch
+) -> None:
+    clock = [1000.0]
+    monkeypatch.setattr("control.periodic.time.monotonic", lambda: clock[0])
+    controller = Controller(
+        store=FakeStore(), interface_name="uagv", publish=sent, motion_flush_interval=5.0
+    )
+    controller.load()
+    controller.handle_message(STATE_TOPIC, state(driving=True))
+    controller.flush()
+    controller.flush()  # registered by the first, written by the second
+    written = len(controller.store.batches[-1].snapshots)
+
+    def flushed_after(header_id: int, seconds: float, **fields: object) -> list[dict]:
+        clock[0] += seconds
+        before = len(controller.store.batches)
+        controller.handle_message(STATE_TOPIC, state(header_id=header_id, **fields))
+        controller.flush()
+        batches = controller.store.batches[before:]
+        return [row for batch in batches for row in batch.snapshots]
+
+    assert written == 1
+    # Driving on to the next node: only motion (last node, last seen) changed.
+    assert flushed_after(2, 1.0, driving=True, last_node="b") == []
+    assert flushed_after(3, 1.0, driving=True, last_node="c") == []
+    # Stopping is written at once, with the newest position.
+    rows = flushed_after(4, 1.0, driving=False, last_node="c")
+    assert [(r["driving"], r["last_node_id"]) for r in rows] == [(False, "c")]
+    assert flushed_after(5, 1.0, driving=False, last_node="c") == []
+    # An error too, however soon.
+    rows = flushed_after(6, 0.1, errors=(("noRoute", "WARNING", ""),), last_node="c")
+    assert [r["errors"][0]["errorType"] for r in rows] == ["noRoute"]
+    # Motion alone goes out once the interval has passed, and nothing is lost on the way.
+    assert flushed_after(7, 1.0, errors=(("noRoute", "WARNING", ""),), last_node="d") == []
+    rows = flushed_after(8, 4.0, errors=(("noRoute", "WARNING", ""),), last_node="d")
+    assert [r["last_node_id"] for r in rows] == ["d"]
+    assert controller.fleet.vehicles[("sim", "AGV-1")].needs_flush is False
