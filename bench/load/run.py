@@ -251,7 +251,7 @@ def measure(
     if args.py_spy:  # where control's CPU goes, as collapsed stacks (flamegraph input)
         control = next(c for c in children if c.name == "control")
         argv = ["py-spy", "record", "-p", str(control.popen.pid), "-d", str(int(args.seconds))]
-        argv += ["-f", "raw", "-o", str(work / "control.stacks"), "--nonblocking"]
+        argv += ["-f", "raw", "-o", str(work / "control.stacks"), "--nonblocking", "--gil"]
         probes.append(
             Child(
                 "py-spy",
