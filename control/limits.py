@@ -10,6 +10,8 @@ reason instead, because the vehicle would only reject it.
 
 from typing import Any
 
+import msgspec
+
 from control.capabilities import StringLimits
 
 _ID_KEYS = frozenset({"orderId", "nodeId", "edgeId", "actionId", "mapId"})
@@ -21,11 +23,8 @@ class ProtocolLimitError(ValueError):
     """A message breaks one of the vehicle's protocol limits; the text says which."""
 
 
-def check_message(limits: StringLimits, topic: str, payload: bytes, message: Any) -> None:
-    """Raise ProtocolLimitError if `message` (as `payload` on `topic`) breaks `limits`.
-
-    `message` is the decoded JSON of `payload` (dicts and lists).
-    """
+def check_message(limits: StringLimits, topic: str, payload: bytes) -> None:
+    """Raise ProtocolLimitError if `payload` (JSON) on `topic` breaks `limits`."""
     if limits.msg_len is not None and len(payload) > limits.msg_len:
         raise ProtocolLimitError(
             f"message of {len(payload)} bytes exceeds the vehicle's msgLen {limits.msg_len}"
@@ -43,8 +42,8 @@ def check_message(limits: StringLimits, topic: str, payload: bytes, message: Any
                 raise ProtocolLimitError(
                     f"topic level {level!r} exceeds topicElemLen {limits.topic_elem_len}"
                 )
-    if limits.limits_strings:  # most factsheets set none: no walk through every order
-        for key, value in _strings(message):
+    if limits.limits_strings:  # most factsheets set none: no decoding, no walk
+        for key, value in _strings(msgspec.json.decode(payload)):
             _check_string(limits, key, value)
 
 
