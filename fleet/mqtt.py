@@ -142,7 +142,8 @@ class BufferedClient(mqtt.Client):
 
     def loop_read(self, max_packets: int = 1) -> MQTTErrorCode:
         """Handle up to `PACKETS_PER_READ` packets: whole QoS 0 publishes straight from the
-        read buffer (filled here when empty), anything else the paho way."""
+        read buffer (filled here when empty), anything else the paho way; then write what
+        the handlers published."""
         sock = self._sock
         if not isinstance(sock, _BufferedSocket):
             return super().loop_read(max_packets)
@@ -170,6 +171,10 @@ class BufferedClient(mqtt.Client):
                 break
             if not sock.buffered() or sock.buffered() == left or self.want_write():
                 break  # drained, a partial packet (the rest is not here yet), or a write waits
+        if rc == MQTTErrorCode.MQTT_ERR_SUCCESS and self._sock is sock and self.want_write():
+            # What the handlers published (order updates) goes out now: paho's loop would
+            # write it only after its next select and the next read.
+            rc = self.loop_write()
         return rc
 
     def _publishes_from_buffer(self, sock: _BufferedSocket, limit: int) -> int:
@@ -177,9 +182,10 @@ class BufferedClient(mqtt.Client):
 
         paho reads each packet with four `recv` calls, a dict of reading state and a
         dispatch on the command: for a fleet's states and visualizations that was a good
-        part of control's paho thread. Stops at anything else (another packet type, QoS 1
-        or 2, a packet not yet whole, a malformed topic length), which paho then reads
-        itself; never with MQTT 5 or per-topic callbacks."""
+        part of control's paho thread. Stops after a publish that made something to write
+        (an order update waits for no further message), and at anything else (another
+        packet type, QoS 1 or 2, a packet not yet whole, a malformed topic length), which
+        paho then reads itself; never with MQTT 5 or per-topic callbacks."""
         if self._protocol == mqtt.MQTTv5 or self._filtered:
             return 0
         buffer, pos, end = sock._buffer, sock._pos, len(sock._buffer)
@@ -205,6 +211,8 @@ class BufferedClient(mqtt.Client):
                 handled += 1
                 if on_message is not None:
                     self._deliver(on_message, message)
+                if self._out_packet:
+                    break  # the handler published: paho's loop writes it before reading on
         if handled:
             with self._msgtime_mutex:
                 self._last_bytes_received = mqtt.time_func()

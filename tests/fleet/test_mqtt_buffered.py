@@ -249,3 +249,32 @@ def test_publishes_whole_in_the_buffer_are_read_from_it_and_the_rest_the_paho_wa
         client._sock = None
         left.close()
         right.close()
+
+
+def test_a_read_stops_at_a_publish_from_the_handler_and_writes_it_at_once() -> None:
+    client, _ = make_client("mqtt://127.0.0.1:1", client_id_prefix="buffer-write")
+    seen: list[str] = []
+
+    def on_message(c: mqtt.Client, userdata: object, message: mqtt.MQTTMessage) -> None:
+        seen.append(message.topic)
+        if message.topic == "v/b":
+            c.publish("v/b/order", b"update", qos=0)  # an order update a state caused
+
+    client.on_message = on_message
+    client._state = mqtt._ConnectionState.MQTT_CS_CONNECTED  # as after CONNACK
+    left, right = socket.socketpair()
+    try:
+        right.setblocking(False)
+        client._sock = _BufferedSocket(right)
+        left.sendall(b"".join(_publish(t, b"state") for t in (b"v/a", b"v/b", b"v/c")))
+        time.sleep(0.05)
+        assert client.loop_read() == mqtt.MQTT_ERR_SUCCESS
+        assert seen == ["v/a", "v/b"]  # v/c waits for the next read
+        left.settimeout(1)
+        assert left.recv(100) == _publish(b"v/b/order", b"update")
+        client.loop_read()
+        assert seen == ["v/a", "v/b", "v/c"]
+    finally:
+        client._sock = None
+        left.close()
+        right.close()
