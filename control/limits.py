@@ -8,6 +8,8 @@ message that does not fit is not sent: the order (or instant action) is refused 
 reason instead, because the vehicle would only reject it.
 """
 
+import functools
+import re
 from typing import Any
 
 import msgspec
@@ -42,7 +44,9 @@ def check_message(limits: StringLimits, topic: str, payload: bytes) -> None:
                 raise ProtocolLimitError(
                     f"topic level {level!r} exceeds topicElemLen {limits.topic_elem_len}"
                 )
-    if limits.limits_strings:  # most factsheets set none: no decoding, no walk
+    # Most factsheets set no string limit; with one, a scan of the text in C tells whether
+    # any string could break it, and only then is the message decoded and walked.
+    if limits.limits_strings and any(scan.search(payload) for scan in _suspects(limits)):
         for key, value in _strings(msgspec.json.decode(payload)):
             _check_string(limits, key, value)
 
@@ -84,3 +88,42 @@ def _strings(node: Any, key: str = "") -> list[tuple[str, str]]:
         elif kind is list:
             stack.extend((key, child) for child in reversed(node))
     return found
+
+
+@functools.cache
+def _suspects(limits: StringLimits) -> tuple[re.Pattern[bytes], ...]:
+    """Scans of the JSON text that find every string that could break `limits`, and more.
+
+    Walking a long order with its horizon, on every update, was most of publishing it
+    (issue 11); these scans, each starting with a literal that `re` searches for quickly, let
+    the walk run only when it may find something. Every limited key ends in `Id`, `Type` or
+    `RefPoint`, and a JSON string cannot hold an unescaped quote, so `Id"` followed by a
+    colon is the end of a key. A value is suspect when it is a list (its strings count under
+    the key) or an object, has more bytes than a limit before its first backslash (a
+    string's bytes and escapes are never fewer than its characters), or with
+    `idNumericalOnly` is not all ASCII digits; so is any whitespace around the colon. An
+    action parameter with a limited key is suspect on the same terms, or when its key does
+    not come first.
+    """
+    lengths = [n for n in (limits.id_len, limits.load_id_len, limits.enum_len) if n is not None]
+    ids = [n for n in (limits.id_len, limits.load_id_len) if n is not None]
+    numeric = limits.id_numerical_only
+
+    def value(limit: int | None, numeric: bool) -> bytes:
+        forms = [rb"[\s\[{]"]
+        if limit is not None:  # up to `limit` plain bytes, possessively, then no quote
+            forms.append(rb'"[^"\\]{0,%d}+[^"]' % limit)
+        if numeric:
+            forms.append(rb'"(?![0-9]+")')
+        return b"(?:" + b"|".join(forms) + b")"
+
+    scans = []
+    if ids or numeric:
+        scans.append(b'Id"(?:\\s|:' + value(min(ids, default=None), numeric) + b")")
+    if limits.enum_len is not None:
+        enum = b'"(?:\\s|:' + value(limits.enum_len, False) + b")"
+        scans += [b"Type" + enum, b"RefPoint" + enum]
+    keys = b"|".join(sorted(key.encode() for key in _CHECKED_KEYS))
+    parameter = rb'"key"\s*:\s*"(?:' + keys + rb')"\s*(?:\}|,\s*"value"\s*:\s*'
+    scans.append(parameter + value(min(lengths, default=None), numeric) + b")")
+    return tuple(re.compile(scan) for scan in scans)
