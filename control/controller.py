@@ -62,6 +62,7 @@ class Controller(PeriodicWork):
         interface_name: str,
         publish: Publish | None = None,
         base_ahead: int | None = None,
+        horizon: int | None = None,
         traffic: bool = False,
         park_idle: bool = True,
         liveness_probe_after: float = PROBE_AFTER,
@@ -91,7 +92,11 @@ class Controller(PeriodicWork):
         self.traffic = TrafficLink(fleet, park=park, lock=self.lock) if traffic else None
         self.waits = WaitLog()  # traffic waits as episodes, for the reports (control.wait_log)
         self.driver = OrderDriver(
-            self.publisher, lambda: self.layouts, base_ahead=base_ahead, traffic=self.traffic
+            self.publisher,
+            lambda: self.layouts,
+            base_ahead=base_ahead,
+            horizon=horizon,
+            traffic=self.traffic,
         )
         self.action_states = ActionStatePolicy(self.publisher)  # 3.0 retries, clearing (E.27-28)
         # Map releases (K), 3.0 zone sets and zone/edge requests (L): control.distribution.

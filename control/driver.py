@@ -40,11 +40,13 @@ class OrderDriver:
         layouts: Callable[[], dict[str, LayoutIndex]],
         *,
         base_ahead: int | None = None,
+        horizon: int | None = None,
         traffic: TrafficLink | None = None,
     ) -> None:
         self.publisher = publisher
         self.layouts = layouts
         self.base_ahead = base_ahead
+        self.horizon = horizon  # unreleased nodes sent after the base; None = all
         # With traffic management the base reaches as far as traffic released (control/
         # traffic_link.py); without it `base_ahead` nodes ahead of the vehicle.
         self.traffic = traffic
@@ -180,7 +182,9 @@ class OrderDriver:
         window: Window | None = initial_window(len(order.route), self._limits(vehicle))
         if self.traffic is not None:
             limits = self._limits(vehicle)
-            window = self.traffic.first_window(vehicle, execution, order.map_id, limits.max_nodes)
+            window = self.traffic.first_window(
+                vehicle, execution, order.map_id, limits.max_nodes, limits.horizon
+            )
         if window is None or not self._send(vehicle, order, execution, window, update_id=0):
             return None
         vehicle.execution = execution
@@ -195,7 +199,9 @@ class OrderDriver:
             return
         if self.traffic is not None and self.traffic.controls(vehicle, execution.vda_order_id):
             limits = self._limits(vehicle)
-            traffic_window = self.traffic.next_window(vehicle, execution, limits.max_nodes)
+            traffic_window = self.traffic.next_window(
+                vehicle, execution, limits.max_nodes, limits.horizon
+            )
             if traffic_window is not None:
                 self._send(vehicle, order, execution, traffic_window, execution.update_id + 1)
             return
@@ -286,11 +292,12 @@ class OrderDriver:
     def _limits(self, vehicle: LiveVehicle) -> OrderLimits:
         capabilities = vehicle.capabilities
         if capabilities is None:
-            return OrderLimits(base_ahead=self.base_ahead)
+            return OrderLimits(base_ahead=self.base_ahead, horizon=self.horizon)
         return OrderLimits(
             max_nodes=capabilities.max_order_nodes,
             base_ahead=self.base_ahead,
             min_interval=capabilities.min_order_interval,
+            horizon=self.horizon,
         )
 
     def _end(self, progress: Progress) -> None:

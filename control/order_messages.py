@@ -22,6 +22,10 @@ class OrderLimits:
     max_nodes: int | None = None  # factsheet maxArrayLens order.nodes (edges + 1); None = any
     base_ahead: int | None = None  # released nodes ahead of the vehicle; None = the whole route
     min_interval: float = 0.0  # factsheet timing.minOrderInterval, seconds
+    # Unreleased nodes sent after the base; None = the rest of the route. The vehicle repeats
+    # them in every state (nodeStates, edgeStates), so a whole-route horizon makes each state
+    # as long as the route.
+    horizon: int | None = None
 
 
 @dataclass(frozen=True)
@@ -51,7 +55,10 @@ def _window(first: int, route_length: int, *, passed: int, limits: OrderLimits) 
     end = route_length - 1
     last = end if limits.max_nodes is None else min(end, first + max(limits.max_nodes, 2) - 1)
     target = end if limits.base_ahead is None else passed + max(limits.base_ahead, 1)
-    return Window(first=first, last=last, released=max(first, min(last, target)))
+    released = max(first, min(last, target))
+    if limits.horizon is not None:
+        last = min(last, released + limits.horizon)
+    return Window(first=first, last=last, released=released)
 
 
 def build_order(

@@ -349,7 +349,12 @@ class TrafficLink:
         return [ids[n] for n in v.route], v.base, [s for s in v.stops if s < len(v.route)]
 
     def first_window(
-        self, vehicle: LiveVehicle, execution: OrderExecution, map_id: str, max_nodes: int | None
+        self,
+        vehicle: LiveVehicle,
+        execution: OrderExecution,
+        map_id: str,
+        max_nodes: int | None,
+        horizon: int | None = None,
     ) -> Window | None:
         """Plan a new execution (its route becomes the plan) and the window of its first
         message; None when no plan exists now (the order waits for the next sync)."""
@@ -359,10 +364,14 @@ class TrafficLink:
             return None
         execution.route = list(plan.nodes)
         execution.move_stops(plan.stops)
-        return window(len(plan.nodes), 0, plan.base_end, max_nodes)
+        return window(len(plan.nodes), 0, plan.base_end, max_nodes, horizon)
 
     def next_window(
-        self, vehicle: LiveVehicle, execution: OrderExecution, max_nodes: int | None
+        self,
+        vehicle: LiveVehicle,
+        execution: OrderExecution,
+        max_nodes: int | None,
+        horizon: int | None = None,
     ) -> Window | None:
         """The window of an update extending the base to what traffic released, or None.
 
@@ -381,7 +390,7 @@ class TrafficLink:
         current = execution.stop_indices
         if 0 < len(stops) <= len(current):
             execution.move_stops(current[: len(current) - len(stops)] + stops)
-        extension = window(len(route), first, base, max_nodes)
+        extension = window(len(route), first, base, max_nodes, horizon)
         return extension if extension.released > first else None
 
     def tick(self, now: float) -> None:

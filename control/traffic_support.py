@@ -88,11 +88,21 @@ def layout_of(index: LayoutIndex) -> Layout:
     return Layout(nodes, edges)
 
 
-def window(route_length: int, first: int, base_end: int, max_nodes: int | None) -> Window:
-    """The route indices a message carries from `first`, released up to `base_end` at most."""
+def window(
+    route_length: int,
+    first: int,
+    base_end: int,
+    max_nodes: int | None,
+    horizon: int | None = None,
+) -> Window:
+    """The route indices a message carries from `first`, released up to `base_end` at most,
+    with at most `horizon` unreleased nodes after the base (None: the rest of the route)."""
     end = route_length - 1
     last = end if max_nodes is None else min(end, first + max(max_nodes, 2) - 1)
-    return Window(first=first, last=last, released=max(first, min(last, base_end)))
+    released = max(first, min(last, base_end))
+    if horizon is not None:
+        last = min(last, released + horizon)
+    return Window(first=first, last=last, released=released)
 
 
 def blocking_reason(vehicle: LiveVehicle, state: vda5050.State | None, now: float) -> str | None:

@@ -211,6 +211,10 @@ FLEET_CONTROL = {
     # How many route nodes ahead of a vehicle are released (its VDA 5050 base); the rest is
     # sent as horizon and released with order updates as the vehicle advances. 0 = all at once.
     "BASE_AHEAD": env.int("FLEET_BASE_AHEAD", default=3),
+    # How many unreleased nodes after the base an order carries (its horizon); 0 = the rest of
+    # the route. Vehicles repeat the horizon in every state, so a whole-route horizon makes
+    # every state message as long as the route (docs/LOAD.md, eighth round).
+    "HORIZON_NODES": env.int("FLEET_HORIZON_NODES", default=10),
     # Traffic management (control/traffic_link.py) decides each base; off = BASE_AHEAD only,
     # enough for a single-vehicle site.
     "TRAFFIC": env.bool("FLEET_TRAFFIC", default=True),

@@ -769,3 +769,22 @@ def test_a_change_of_motion_alone_is_written_at_the_motion_interval_any_other_at
     rows = flushed_after(8, 4.0, errors=(("noRoute", "WARNING", ""),), last_node="d")
     assert [r["last_node_id"] for r in rows] == ["d"]
     assert controller.fleet.vehicles[("sim", "AGV-1")].needs_flush is False
+
+
+def test_a_horizon_limit_sends_that_many_unreleased_nodes_after_the_base(sent) -> None:
+    controller = Controller(
+        store=FakeStore(), interface_name="uagv", publish=sent, base_ahead=1, horizon=1
+    )
+    controller.load()
+    controller.handle_message(STATE_TOPIC, state(header_id=1))
+    controller.sync([order()])
+    controller.handle_message(
+        STATE_TOPIC, state(header_id=2, order_id="TO-7", nodes=("b",), horizon=("c",))
+    )
+    controller.handle_message(
+        STATE_TOPIC, state(header_id=3, order_id="TO-7", last_node="b", horizon=("c",))
+    )
+
+    first, update = orders_in(sent)
+    assert released(first) == [("a", 0, True), ("b", 2, True), ("c", 4, False)]
+    assert released(update) == [("b", 2, True), ("c", 4, True), ("d", 6, False)]

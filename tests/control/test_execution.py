@@ -10,6 +10,7 @@ from control.order_messages import (
     extension_window,
     initial_window,
 )
+from control.traffic_support import window as traffic_window
 from tests.control.fakes import LINE
 from tests.vda5050.support import validator
 
@@ -108,6 +109,9 @@ def test_an_update_starts_at_the_stitching_node_with_its_sequence_id_and_actions
         (OrderLimits(base_ahead=2), Window(0, 9, 2)),
         (OrderLimits(max_nodes=4), Window(0, 3, 3)),
         (OrderLimits(max_nodes=4, base_ahead=1), Window(0, 3, 1)),
+        (OrderLimits(base_ahead=2, horizon=3), Window(0, 5, 2)),
+        (OrderLimits(base_ahead=2, horizon=0), Window(0, 2, 2)),
+        (OrderLimits(max_nodes=4, base_ahead=1, horizon=5), Window(0, 3, 1)),
     ],
 )
 def test_initial_window_respects_base_ahead_and_the_message_size_limit(limits, expected) -> None:
@@ -120,3 +124,17 @@ def test_extension_follows_the_vehicle_and_stops_when_all_is_released() -> None:
     assert extension_window(10, released_until=2, passed=1, limits=limits) == Window(2, 5, 3)
     assert extension_window(10, released_until=3, passed=1, limits=limits) is None
     assert extension_window(10, released_until=8, passed=8, limits=limits) == Window(8, 9, 9)
+
+
+def test_the_horizon_moves_on_with_the_base_and_ends_with_the_route() -> None:
+    limits = OrderLimits(base_ahead=2, horizon=2)
+
+    assert extension_window(10, released_until=2, passed=1, limits=limits) == Window(2, 5, 3)
+    assert extension_window(10, released_until=3, passed=5, limits=limits) == Window(3, 9, 7)
+    assert extension_window(10, released_until=7, passed=8, limits=limits) == Window(7, 9, 9)
+
+
+def test_traffic_windows_carry_the_horizon_limit_after_the_released_base() -> None:
+    assert traffic_window(10, 0, 3, None, horizon=2) == Window(0, 5, 3)
+    assert traffic_window(10, 3, 8, None, horizon=2) == Window(3, 9, 8)
+    assert traffic_window(10, 0, 3, 4, horizon=2) == Window(0, 3, 3)  # message size first
