@@ -9,32 +9,34 @@ route goes out as horizon.
 
 Vehicles in error (FATAL), in a manual mode or offline are static obstacles (`block`) until they
 are back in automatic mode at a known node (`restore`). Route index i of a plan is node sequence
-id 2·i, as everywhere in `control`.
+id 2·i, as everywhere in `control`. What part of a plan each order message carries is in
+`control.traffic_windows`; how a route search lets the controller's lock go, in
+`control.traffic_lock`.
 """
 
 import logging
-import threading
 import time
-from collections.abc import Callable, Iterable, Iterator
-from contextlib import contextmanager
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable
 from typing import Any
 
 import vda5050
-from control.execution import LayoutIndex, OrderExecution, Window
+from control.execution import LayoutIndex
 from control.live import LiveVehicle
 from control.parking import IdleParking
 from control.session import Link
+from control.traffic_lock import SearchLock
 from control.traffic_support import (
     DEFAULT_CLASS,
     DWELL,
     Stats,
+    Tracked,
     blocking_reason,
     envelope,
     layout_of,
+    name,
     vehicle_class,
-    window,
 )
+from control.traffic_windows import OrderWindows
 from traffic import Goal, NoPlanError, Plan, ReleasePolicy, TrafficManager
 
 logger = logging.getLogger(__name__)
@@ -46,22 +48,7 @@ UNPLANNED = "driving an order traffic did not plan"
 QUICK_SEARCH = (1000, 2.0)
 
 
-@dataclass
-class Tracked:
-    """One vehicle under traffic control."""
-
-    vehicle: LiveVehicle
-    map_id: str
-    order_id: str | None = None  # the VDA 5050 order the manager's plan belongs to
-    static: str | None = None  # why it is a static obstacle
-    # An order driven while traffic lost track of it (blocked mid-order, adopted after a
-    # restart): it gets no more base until the vehicle stops at its decision point and is
-    # planned again from there, route index `offset` of the order being index 0 of the plan.
-    lost: str | None = None
-    offset: int = 0
-
-
-class TrafficLink:
+class TrafficLink(OrderWindows):
     """Traffic managers of every map and the vehicles they control (call under the lock)."""
 
     def __init__(
@@ -76,8 +63,7 @@ class TrafficLink:
         self.fleet = fleet
         # The controller's lock (an RLock): a route search lets it go while it runs, so that
         # state messages are handled meanwhile (TrafficManager.unlocked, `let_go`).
-        self.lock = lock
-        self._letting_go = threading.local()  # .allowed: this thread's search may let go now
+        self.searches = SearchLock(lock)
         self._starting: set[str] = set()  # vehicles whose order start is being planned
         # Idle vehicles in the way of an order that finds no plan are sent to park through
         # `park` (a `vehicle.park` job for the flush); None: they stay (control/parking.py).
@@ -116,8 +102,8 @@ class TrafficLink:
                     quick_search=QUICK_SEARCH,
                     replan_to_base=False,  # a goal's actions cannot move onto the sent base
                 )
-                if self.lock is not None:
-                    self.managers[map_id].unlocked = self._let_go_if_allowed
+                if self.searches.lock is not None:
+                    self.managers[map_id].unlocked = self.searches.let_go_if_allowed
                 self._indexes[map_id] = index
 
     def _count(self, problem: str) -> None:
@@ -286,7 +272,7 @@ class TrafficLink:
             self._reset(tracked, state.last_node_id, now)
         self._starting.add(name(vehicle))
         try:
-            with self._searches_let_go():
+            with self.searches.searches_let_go():
                 plan = manager.plan(name(vehicle), [Goal(g, self.dwell) for g in goals], now)
         except (NoPlanError, KeyError) as exc:
             self._count(f"no plan for {order_id}: {exc!r}")
@@ -340,59 +326,6 @@ class TrafficLink:
         tracked = self.tracked.get(name(vehicle))
         return tracked is not None and tracked.order_id == order_id
 
-    def route(self, vehicle: LiveVehicle) -> tuple[list[str], int, list[int]]:
-        """The vehicle's planned route (node ids), its released base end and its goal indices."""
-        tracked = self.tracked[name(vehicle)]
-        manager = self.managers[tracked.map_id]
-        v = manager.vehicle(name(vehicle))
-        ids = manager.layout.node_ids
-        return [ids[n] for n in v.route], v.base, [s for s in v.stops if s < len(v.route)]
-
-    def first_window(
-        self,
-        vehicle: LiveVehicle,
-        execution: OrderExecution,
-        map_id: str,
-        max_nodes: int | None,
-        horizon: int | None = None,
-    ) -> Window | None:
-        """Plan a new execution (its route becomes the plan) and the window of its first
-        message; None when no plan exists now (the order waits for the next sync)."""
-        goals = [execution.route[i] for i in execution.stop_indices]
-        plan = self.start(vehicle, execution.vda_order_id, map_id, goals, time.monotonic())
-        if plan is None:
-            return None
-        execution.route = list(plan.nodes)
-        execution.move_stops(plan.stops)
-        return window(len(plan.nodes), 0, plan.base_end, max_nodes, horizon)
-
-    def next_window(
-        self,
-        vehicle: LiveVehicle,
-        execution: OrderExecution,
-        max_nodes: int | None,
-        horizon: int | None = None,
-    ) -> Window | None:
-        """The window of an update extending the base to what traffic released, or None.
-
-        The route beyond the sent base may have been re-planned: the execution takes the new
-        one (the base, indices up to `released_until`, never changes)."""
-        route, base, stops = self.route(vehicle)
-        offset = self.tracked[name(vehicle)].offset
-        if offset:  # re-adopted: the plan continues the order from its decision point
-            route = execution.route[:offset] + route
-            base, stops = base + offset, [s + offset for s in stops]
-        first = execution.released_until
-        if base <= first:
-            return None
-        execution.route = route
-        # A re-plan keeps only the goals still ahead: they are the last stops of the order.
-        current = execution.stop_indices
-        if 0 < len(stops) <= len(current):
-            execution.move_stops(current[: len(current) - len(stops)] + stops)
-        extension = window(len(route), first, base, max_nodes, horizon)
-        return extension if extension.released > first else None
-
     def tick(self, now: float) -> None:
         """About once a second: block vehicles that went offline, re-time and re-plan."""
         # Vehicles that went offline are blocked first, and those queued behind them
@@ -408,36 +341,11 @@ class TrafficLink:
                     behind[name(other)] = self.tracked[name(other)]
         for queued_name, queued in behind.items():
             if queued.static is None and self.tracked.get(queued_name) is queued:
-                with self._searches_let_go():
+                with self.searches.searches_let_go():
                     self.managers[queued.map_id].replan(queued_name, now)
         for manager in list(self.managers.values()):
-            with self._searches_let_go():  # its re-plans: state messages go on meanwhile
+            with self.searches.searches_let_go():  # its re-plans: state messages go on meanwhile
                 manager.tick(now)
-
-    # -- letting the controller's lock go during a search ---------------------------------------
-    #
-    # A route search takes milliseconds, up to a hundred in congestion (docs/LOAD.md). Only two
-    # callers let the lock go for it: an order's start and the tick's re-plans, each a single
-    # search whose result the manager checks against the table once the lock is back. Searches
-    # inside composite changes (block, restore, re-adoption) keep it: nobody may see those
-    # half done.
-
-    @contextmanager
-    def _searches_let_go(self) -> Iterator[None]:
-        before = getattr(self._letting_go, "allowed", False)
-        self._letting_go.allowed = True
-        try:
-            yield
-        finally:
-            self._letting_go.allowed = before
-
-    @contextmanager
-    def _let_go_if_allowed(self) -> Iterator[None]:
-        if getattr(self._letting_go, "allowed", False):
-            with let_go(self.lock):
-                yield
-        else:
-            yield
 
     # -- for the live page ----------------------------------------------------------------------
 
@@ -462,24 +370,3 @@ class TrafficLink:
         cycles = sum(len(m.wait_cycles()) for m in self.managers.values())
         stalled = sum(len(m.stalled(now)) for m in self.managers.values())
         return {"cycles": cycles, "stalled": stalled}
-
-
-@contextmanager
-def let_go(lock: Any) -> Iterator[None]:
-    """Release `lock`, an RLock this thread may hold (at any depth), for the block.
-
-    Uses the RLock methods `threading.Condition` uses for the same purpose (`_is_owned`,
-    `_release_save`, `_acquire_restore`); a lock without them is kept."""
-    if not getattr(lock, "_is_owned", lambda: False)():
-        yield
-        return
-    saved = lock._release_save()
-    try:
-        yield
-    finally:
-        lock._acquire_restore(saved)
-
-
-def name(vehicle: LiveVehicle) -> str:
-    """The traffic manager's id of a vehicle."""
-    return f"{vehicle.manufacturer}/{vehicle.serial_number}"

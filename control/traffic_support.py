@@ -133,3 +133,23 @@ class Stats:
         self.worst = max(self.worst, seconds)
         if len(self.samples) < 100_000:
             self.samples.append(seconds)
+
+
+@dataclass
+class Tracked:
+    """One vehicle under traffic control."""
+
+    vehicle: LiveVehicle
+    map_id: str
+    order_id: str | None = None  # the VDA 5050 order the manager's plan belongs to
+    static: str | None = None  # why it is a static obstacle
+    # An order driven while traffic lost track of it (blocked mid-order, adopted after a
+    # restart): it gets no more base until the vehicle stops at its decision point and is
+    # planned again from there, route index `offset` of the order being index 0 of the plan.
+    lost: str | None = None
+    offset: int = 0
+
+
+def name(vehicle: LiveVehicle) -> str:
+    """The traffic manager's id of a vehicle."""
+    return f"{vehicle.manufacturer}/{vehicle.serial_number}"
