@@ -9,14 +9,16 @@ the time since its last look at each vehicle into busy/idle/charging/error/offli
 import bisect
 import math
 from collections import Counter, defaultdict
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, date, datetime, timedelta
 from typing import Any
 
 from django.db import transaction
+from django.db.models import Model
 from django.utils import timezone
 
+from fleet.bulk import update_rows
 from orders.models import TransportOrder
 from reports.models import (
     LEAD_TIME_BUCKETS,
@@ -171,7 +173,7 @@ class Ledger:
             for column, value in delta.items():
                 total = getattr(row, column) + value
                 setattr(row, column, round(total) if column in COUNT_COLUMNS else total)
-        VehicleHour.objects.bulk_update(changed, HOUR_COLUMNS, batch_size=500)
+        update_rows(VehicleHour, [_values(row, HOUR_COLUMNS) for row in changed], HOUR_COLUMNS)
         VehicleHour.objects.bulk_create(created, batch_size=500)
 
     def _apply_lead_times(self) -> None:
@@ -274,6 +276,11 @@ def classify(vehicle: dict[str, Any], busy: set[int]) -> str:
     return "idle"
 
 
+def _values(row: Model, fields: Sequence[str]) -> dict[str, Any]:
+    """`row`'s pk and `fields`, for `fleet.bulk.update_rows`."""
+    return {"pk": row.pk} | {name: getattr(row, name) for name in fields}
+
+
 def sample_vehicles(*, now: datetime | None = None) -> int:
     """Look at every vehicle's snapshot once and add the time since the last look; return count."""
     now = now or timezone.now()
@@ -310,6 +317,6 @@ def sample_vehicles(*, now: datetime | None = None) -> int:
             mark.battery_charge, mark.error_types = sample.battery_charge, list(sample.error_types)
         ledger.apply()
         fields = ["at", "x", "y", "map_id", "battery_charge", "error_types"]
-        SamplerMark.objects.bulk_update(changed, fields, batch_size=500)
+        update_rows(SamplerMark, [_values(mark, fields) for mark in changed], fields)
         SamplerMark.objects.bulk_create(created, batch_size=500)
     return len(changed) + len(created)
