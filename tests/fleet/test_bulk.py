@@ -2,6 +2,7 @@
 `bulk_update` writes (times, NULLs, JSON, text with quotes), only the named fields."""
 
 from datetime import UTC, datetime
+from typing import Any
 
 import pytest
 from django.db import connection
@@ -33,7 +34,7 @@ def _stored() -> list[tuple[object, ...]]:
 @pytest.mark.parametrize("batch_size", [1000, 2])
 def test_update_rows_stores_what_bulk_update_stores(batch_size: int) -> None:
     marks = _marks(5)
-    values = [
+    values: list[dict[str, Any]] = [
         {"at": datetime(2026, 11, 27, 2, 3, 4, 500000, tzinfo=UTC), "x": 1.5, "y": -2.25},
         {"at": EARLIER, "x": None, "y": None, "map_id": 'hall "1" ü→\\'},
         {"battery_charge": 0.1 + 0.2, "error_types": ["noRoute", "it's"]},
@@ -62,7 +63,7 @@ def test_only_the_named_fields_are_written() -> None:
     assert update_rows(SamplerMark, [], ["map_id"]) == 0
 
 
-def test_on_postgresql_it_is_one_statement_per_batch(django_assert_num_queries) -> None:
+def test_on_postgresql_it_is_one_statement_per_batch(django_assert_num_queries: Any) -> None:
     if connection.vendor != "postgresql":
         pytest.skip("the set-based path is PostgreSQL's")
     marks = _marks(5)
