@@ -47,6 +47,7 @@ class _Car:
         "task_plan",
         "stalled",
         "failures",
+        "next_try",
     )
 
     def __init__(self, name: str, idx: int, rng: random.Random) -> None:
@@ -61,6 +62,7 @@ class _Car:
         self.task_plan = False  # the current route serves the task (not a detour or parking)
         self.stalled = False
         self.failures = 0  # plans that failed in a row (retries back off)
+        self.next_try = 0.0  # retry_on_the_way: no new try on the way before
 
 
 class Simulation:
@@ -301,7 +303,34 @@ class Simulation:
         elif v.passed == len(v.route) - 1:
             self._route_done(car)
         elif not car.moving:
+            if self._on_the_way(car) and car.moving:
+                return
             self._depart(car)
+
+    def _on_the_way(self, car: _Car) -> bool:
+        """retry_on_the_way: a vehicle standing at a node on a route that does not serve its
+        task (waiting for its base) plans the task from there; True if it got a plan."""
+        if (
+            not self.config.retry_on_the_way
+            or car.goals is None
+            or car.task_plan
+            or self.now < car.next_try
+        ):
+            return False
+        car.next_try = self.now + self.config.retry_after
+        began, cpu = time.perf_counter(), time.process_time()
+        try:
+            plan = self.manager.plan(car.name, car.goals, self.now)
+        except NoPlanError as failed:
+            self.stats.plan_failures += 1
+            self._apply(failed.releases)  # vehicles sent aside on the way
+            return False
+        self.stats.plan_seconds.append(time.perf_counter() - began)
+        self.stats.plan_cpu_seconds.append(time.process_time() - cpu)
+        car.failures = 0
+        car.task_plan = True
+        self._started(car, plan)
+        return True
 
     def _stop_waiting(self, car: _Car) -> None:
         """The vehicle's stop at its decision point is over: record how long it was."""

@@ -55,6 +55,11 @@ class SimConfig:
     # a task is done when the vehicle passes its last goal, and the next one is planned from
     # there (for a manager with goal_refuge: its plans go on from the goal to a refuge)
     finish_at_goal: bool = False
+    # a vehicle with a task but driving another route (on to its refuge after a failed plan,
+    # or sent aside) tries its task's plan again whenever it stands at a node on the way (its
+    # decision point, waiting for its base), at most once per `retry_after` s, instead of
+    # only at the end of that route
+    retry_on_the_way: bool = False
 
 
 @dataclass

@@ -75,6 +75,8 @@ class TrafficManager(Lifelong):
         step_aside: bool = False,
         refuge_penalty: float = 0.0,
         replan_to_base: bool = True,
+        improve_budget: int = 0,
+        improve_slack: float = 2.0,
     ) -> None:
         self.layout = layout
         # a re-plan may serve the next goal at the decision point (the route then ends or
@@ -110,6 +112,12 @@ class TrafficManager(Lifelong):
             if refuge_penalty > 0 and (goal_refuge or step_aside)
             else None
         )
+        # opt-in (lifelong task streams): per tick, up to `improve_budget` vehicles whose plan
+        # reaches their next goal more than `improve_slack` s later than driving alone would
+        # are re-planned too, not only those waiting at their decision point (a detour or wait
+        # that earlier plans forced may have opened up since)
+        self.improve_budget = improve_budget
+        self.improve_slack = improve_slack
         self._vehicles: list[Vehicle] = []
         self._index: dict[str, int] = {}
         self._waiters: dict[int, set[int]] = {}
@@ -402,7 +410,33 @@ class TrafficManager(Lifelong):
             plan = self.replan(self._vehicles[idx].name, now)
             if plan is not None:
                 releases.extend(plan.releases)
+        if self.improve_budget > 0:
+            for idx in self._late(now)[: self.improve_budget]:
+                plan = self.replan(self._vehicles[idx].name, now)
+                if plan is not None:
+                    releases.extend(plan.releases)
         return releases
+
+    def _late(self, now: float) -> list[int]:
+        """Vehicles whose plan reaches its next goal more than `improve_slack` s later than
+        from their decision point alone on the layout, latest first (not re-planned within
+        `replan_after`)."""
+        late: list[tuple[float, int]] = []
+        for v in self._vehicles:
+            if v.static or now - v.replanned_at < self.replan_after:
+                continue
+            b, last = v.base, len(v.route) - 1
+            stop = next((s for s in v.stops if b < s <= last), -1)
+            if stop < 0:
+                continue
+            goal = v.route[stop]
+            graph = self.graphs[v.cls]
+            alone = graph.cost_to(graph.to(goal), v.route[b], v.headings[b])
+            lateness = v.arrive[stop] - max(now, v.arrive[b]) - alone
+            if lateness > self.improve_slack:
+                late.append((-lateness, v.idx))
+        late.sort()
+        return [idx for _, idx in late]
 
 
 def _planning_state(v: Vehicle) -> tuple[object, ...]:

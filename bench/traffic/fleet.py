@@ -110,6 +110,8 @@ def fleet_manager(
     replan_after: float = 5.0,
     retime_slack: float = 2.0,
     retime_growth: float = 0.0,
+    improve_budget: int = 0,
+    improve_slack: float = 2.0,
 ) -> TrafficManager:
     """A manager with vehicles `v0..` standing at `starts` (node id, heading).
 
@@ -128,6 +130,8 @@ def fleet_manager(
         replan_after=replan_after,
         retime_slack=retime_slack,
         retime_growth=retime_growth,
+        improve_budget=improve_budget,
+        improve_slack=improve_slack,
     )
     for i, (node, heading) in enumerate(starts):
         manager.add_vehicle(f"v{i}", node, 0.0, heading=heading)

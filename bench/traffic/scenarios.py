@@ -28,6 +28,13 @@ S2_BASE = 4  # base steps ahead
 S2_REFUGE_PENALTY = 100.0
 S2_REPLAN_AFTER = 1.0
 S2_REPLAN_BUDGET = 40
+# lifelong S2: per tick, this many more vehicles whose plan reaches the next goal over
+# S2_IMPROVE_SLACK s later than alone are re-planned (`TrafficManager(improve_budget=...)`)
+S2_IMPROVE_BUDGET = 40
+S2_IMPROVE_SLACK = 2.0
+# lifelong S2: a vehicle driving on to its refuge (or aside) tries its errand again whenever it
+# stands at a node on the way (tenth round: with S2_IMPROVE_BUDGET, I-03 1,404 -> 1,456)
+S2_RETRY_ON_THE_WAY = True
 # S1/S3: a search over this many expansions is repeated near-greedy (the planning-time tail)
 QUICK_SEARCH = (1_000, 2.0)
 # S3: its 600 m tours nearly always outgrow the first search; repeated at weight 1.3 instead
@@ -211,6 +218,8 @@ def s2(
             lifelong=lifelong,
             refuge_penalty=S2_REFUGE_PENALTY,
             replan_after=S2_REPLAN_AFTER if lifelong else 5.0,
+            improve_budget=S2_IMPROVE_BUDGET if lifelong else 0,
+            improve_slack=S2_IMPROVE_SLACK,
         )
         config = SimConfig(
             seed=seed,
@@ -221,6 +230,7 @@ def s2(
             retry_after=1.0,
             replan_budget=S2_REPLAN_BUDGET if lifelong else 8,
             finish_at_goal=lifelong,
+            retry_on_the_way=lifelong and S2_RETRY_ON_THE_WAY,
         )
         result = run(manager, LorrTasks(instance), float(instance.steps), config)
         done = sum(1 for t in result.stats.tasks if t.done <= instance.steps)
