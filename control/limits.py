@@ -99,11 +99,10 @@ def _suspects(limits: StringLimits) -> tuple[re.Pattern[bytes], ...]:
     the walk run only when it may find something. Every limited key ends in `Id`, `Type` or
     `RefPoint`, and a JSON string cannot hold an unescaped quote, so `Id"` followed by a
     colon is the end of a key. A value is suspect when it is a list (its strings count under
-    the key) or an object, has more bytes than a limit before its first backslash (a
-    string's bytes and escapes are never fewer than its characters), or with
-    `idNumericalOnly` is not all ASCII digits; so is any whitespace around the colon. An
-    action parameter with a limited key is suspect on the same terms, or when its key does
-    not come first.
+    the key) or an object, a string longer than a limit in bytes (never fewer than its
+    characters) or holding an escape, or with `idNumericalOnly` not all ASCII digits; so is
+    any whitespace around the colon. An action parameter with a limited key is suspect on the
+    same terms, or when its key does not come first.
     """
     lengths = [n for n in (limits.id_len, limits.load_id_len, limits.enum_len) if n is not None]
     ids = [n for n in (limits.id_len, limits.load_id_len) if n is not None]
@@ -111,7 +110,8 @@ def _suspects(limits: StringLimits) -> tuple[re.Pattern[bytes], ...]:
 
     def value(limit: int | None, numeric: bool) -> bytes:
         forms = [rb"[\s\[{]"]
-        if limit is not None:  # up to `limit` plain bytes, possessively, then no quote
+        if limit is not None:  # up to `limit` plain bytes, possessively, then no quote:
+            # more bytes than `limit`, or a backslash
             forms.append(rb'"[^"\\]{0,%d}+[^"]' % limit)
         if numeric:
             forms.append(rb'"(?![0-9]+")')

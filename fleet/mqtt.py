@@ -212,7 +212,7 @@ class BufferedClient(mqtt.Client):
                 if on_message is not None:
                     self._deliver(on_message, message)
                 if self._out_packet:
-                    break  # the handler published: paho's loop writes it before reading on
+                    break  # the handler published: loop_read writes it before reading on
         if handled:
             with self._msgtime_mutex:
                 self._last_bytes_received = mqtt.time_func()
