@@ -205,6 +205,9 @@ FLEET_CONTROL = {
     # of their visualization messages) instead of rebuilding 2,000+ rows a second.
     "BROADCAST_ROWS_PER_S": env.float("FLEET_BROADCAST_ROWS_PER_S", default=1000.0),
     "SYNC_INTERVAL": env.float("FLEET_SYNC_INTERVAL", default=1.0),
+    # Seconds between full reads of the active orders from the database (the syncs between
+    # them work on the last read; a command, e.g. a cancellation, makes the next sync read).
+    "ORDER_READ_INTERVAL": env.float("FLEET_ORDER_READ_INTERVAL", default=3.0),
     # Alerts, inventory, battery and maintenance counters evaluate the flushed snapshots at
     # most this often (seconds; the newest snapshot per vehicle counts).
     "OBSERVE_INTERVAL": env.float("FLEET_OBSERVE_INTERVAL", default=2.0),

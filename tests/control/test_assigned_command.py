@@ -58,7 +58,7 @@ class Control:
     """A control loop in a thread with one idle vehicle at `a`; commands are handed to it with
     `send`, and `sent` collects the orders it publishes."""
 
-    def __init__(self, store: FakeStore) -> None:
+    def __init__(self, store: FakeStore, intervals: dict[str, float] = QUIET) -> None:
         self.store = store
         self.sent: list[str] = []
         self.published = threading.Event()
@@ -69,7 +69,7 @@ class Control:
             NoLink(),  # type: ignore[arg-type]
             receive_commands=self.receive,
             broadcast=lambda rows: None,
-            intervals=QUIET,
+            intervals=intervals,
         )
         self.controller.load()
         self.controller.handle_message(topic(), state(last_node="a"))
@@ -160,6 +160,34 @@ def test_other_commands_still_make_the_full_sync_due_at_once() -> None:
     assert store.full_reads == 2  # the first round, and the one the command made due
     assert store.named_reads == []
     assert control.sent == ["TO-7"]
+
+
+def test_syncs_between_full_reads_work_on_the_last_read_and_a_command_reads_again() -> None:
+    store = CountingStore(orders=[order()])
+    control = Control(store, QUIET | {"SYNC_INTERVAL": 0.01, "ORDER_READ_INTERVAL": 3600.0})
+    synced: list[list[int]] = []
+    sync = control.controller.sync
+
+    def counted(orders: list[ActiveOrder], **kwargs: Any) -> None:
+        synced.append([o.transport_order_id for o in orders])
+        sync(orders, **kwargs)
+
+    control.controller.sync = counted  # type: ignore[method-assign]
+
+    with control:
+        assert control.published.wait(5)  # the order of the first read went out
+        deadline = time.monotonic() + 5
+        while len(synced) < 5 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        reads_before_command = store.full_reads
+        store.synced.clear()
+        control.queue.append({"kind": "order.cancel", "order": 7})
+        assert store.synced.wait(5)
+
+    assert len(synced) >= 5
+    assert all(ids == [7] for ids in synced)  # the syncs in between had the last read's list
+    assert reads_before_command == 1
+    assert store.full_reads == 2  # the command made the next sync read again
 
 
 def test_a_store_without_named_reads_falls_back_to_the_full_sync() -> None:
