@@ -27,7 +27,7 @@ def build_control_loop() -> ControlLoop:
         store=DjangoStore(observer=observer),
         interface_name=settings.VDA5050_INTERFACE,
         base_ahead=settings.FLEET_CONTROL["BASE_AHEAD"] or None,
-        horizon=settings.FLEET_CONTROL.get("HORIZON_NODES") or None,
+        horizon=max(settings.FLEET_CONTROL.get("HORIZON_NODES", 0), 0) or None,
         traffic=settings.FLEET_CONTROL["TRAFFIC"],
         park_idle=settings.FLEET_CONTROL.get("TRAFFIC_PARK_IDLE", True),
         liveness_probe_after=settings.FLEET_CONTROL.get("LIVENESS_PROBE_AFTER", PROBE_AFTER),

@@ -197,7 +197,7 @@ FLEET_CONTROL = {
     # A vehicle whose snapshot changed only in motion (position, last node, battery charge,
     # last seen) is written at most this often; any other change goes with the next flush.
     # The live page gets positions over websockets; the database rows serve lists, dispatch
-    # and counters (1,000 driving vehicles: 900 -> about 300 rows a second, docs/LOAD.md).
+    # and counters (1,000 driving vehicles: 1,150 -> 360 rows a second, docs/LOAD.md).
     "MOTION_FLUSH_INTERVAL": env.float("FLEET_MOTION_FLUSH_INTERVAL", default=5.0),
     "BROADCAST_INTERVAL": env.float("FLEET_BROADCAST_INTERVAL", default=0.2),
     # Browser rows control builds per second at most: a large fleet's live page is updated less
