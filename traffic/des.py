@@ -156,19 +156,25 @@ class Simulation:
     def _try_plan(self, car: _Car) -> None:
         if car.goals is None or car.moving:
             return
+        if not self._plan_task(car):
+            self._fallback(car)
+
+    def _plan_task(self, car: _Car) -> bool:
+        """Plan the car's task from where it stands (timed) and start it; False if no plan."""
+        assert car.goals is not None
         began, cpu = time.perf_counter(), time.process_time()
         try:
             plan = self.manager.plan(car.name, car.goals, self.now)
         except NoPlanError as failed:
             self.stats.plan_failures += 1
             self._apply(failed.releases)  # vehicles sent aside on the way
-            self._fallback(car)
-            return
+            return False
         self.stats.plan_seconds.append(time.perf_counter() - began)
         self.stats.plan_cpu_seconds.append(time.process_time() - cpu)
         car.failures = 0
         car.task_plan = True
         self._started(car, plan)
+        return True
 
     def _fallback(self, car: _Car) -> None:
         layout, v = self.manager.layout, self.manager.vehicle(car.name)
@@ -318,19 +324,7 @@ class Simulation:
         ):
             return False
         car.next_try = self.now + self.config.retry_after
-        began, cpu = time.perf_counter(), time.process_time()
-        try:
-            plan = self.manager.plan(car.name, car.goals, self.now)
-        except NoPlanError as failed:
-            self.stats.plan_failures += 1
-            self._apply(failed.releases)  # vehicles sent aside on the way
-            return False
-        self.stats.plan_seconds.append(time.perf_counter() - began)
-        self.stats.plan_cpu_seconds.append(time.process_time() - cpu)
-        car.failures = 0
-        car.task_plan = True
-        self._started(car, plan)
-        return True
+        return self._plan_task(car)
 
     def _stop_waiting(self, car: _Car) -> None:
         """The vehicle's stop at its decision point is over: record how long it was."""
