@@ -46,6 +46,11 @@ UNPLANNED = "driving an order traffic did not plan"
 # it bounds the time a plan holds the controller's lock in congestion; in the S1 benchmark it
 # cut planning p95 by half with throughput unchanged (docs/TRAFFIC_RESULTS.md, third round).
 QUICK_SEARCH = (1000, 2.0)
+# A vehicle waiting at its decision point whose re-plans keep finding the same route (it
+# waits behind a driving vehicle) is re-planned after 5, 10, 20, then every 40 s, not every
+# 5 s: the tick's re-plans were the largest part of control's route planning under load
+# (docs/LOAD.md, ninth round); the wait itself ends on the event path when the other moves.
+REPLAN_BACKOFF = 8
 
 
 class TrafficLink(OrderWindows):
@@ -101,6 +106,7 @@ class TrafficLink(OrderWindows):
                     policy=self.policy,
                     quick_search=QUICK_SEARCH,
                     replan_to_base=False,  # a goal's actions cannot move onto the sent base
+                    replan_backoff=REPLAN_BACKOFF,
                 )
                 if self.searches.lock is not None:
                     self.managers[map_id].unlocked = self.searches.let_go_if_allowed

@@ -77,6 +77,7 @@ class TrafficManager(Lifelong):
         replan_to_base: bool = True,
         improve_budget: int = 0,
         improve_slack: float = 2.0,
+        replan_backoff: int = 1,
     ) -> None:
         self.layout = layout
         # a re-plan may serve the next goal at the decision point (the route then ends or
@@ -118,6 +119,13 @@ class TrafficManager(Lifelong):
         # that earlier plans forced may have opened up since)
         self.improve_budget = improve_budget
         self.improve_slack = improve_slack
+        # a waiting vehicle whose re-plans kept its route k times in a row is re-planned again
+        # only after replan_after · 2^k s, at most · `replan_backoff` (1: never later), until it
+        # moves on or gets a new plan: control's tick spent its re-plans on vehicles that wait
+        # behind a driving vehicle and find the same route each time
+        self.replan_backoff = replan_backoff
+        self._unchanged: dict[int, tuple[int, int, int]] = {}  # idx -> (count, passed, plan)
+        self.replans = self.replans_unchanged = 0  # the tick's re-plans of waiting vehicles
         self._vehicles: list[Vehicle] = []
         self._index: dict[str, int] = {}
         self._waiters: dict[int, set[int]] = {}
@@ -404,18 +412,40 @@ class TrafficManager(Lifelong):
             if v.blocked_by >= 0
             and v.base == v.passed
             and now - v.blocked_since >= self.replan_after
-            and now - v.replanned_at >= self.replan_after
+            and now - v.replanned_at >= self._replan_interval(v)
         )
         for _, idx in waiting[:budget]:
-            plan = self.replan(self._vehicles[idx].name, now)
-            if plan is not None:
-                releases.extend(plan.releases)
+            releases.extend(self._replan_waiting(self._vehicles[idx], now))
         if self.improve_budget > 0:
             for idx in self._late(now)[: self.improve_budget]:
                 plan = self.replan(self._vehicles[idx].name, now)
                 if plan is not None:
                     releases.extend(plan.releases)
         return releases
+
+    def _replan_interval(self, v: Vehicle) -> float:
+        """Seconds between the tick's re-plans of waiting vehicle `v` (see `replan_backoff`)."""
+        streak = self._unchanged.get(v.idx)
+        if streak is None:
+            return self.replan_after
+        count, passed, plan_id = streak
+        if (passed, plan_id) != (v.passed, v.plan_id):  # it moved on: a fresh start
+            del self._unchanged[v.idx]
+            return self.replan_after
+        return self.replan_after * min(2**count, self.replan_backoff)
+
+    def _replan_waiting(self, v: Vehicle, now: float) -> list[Release]:
+        """Re-plan a vehicle waiting at its decision point; count whether its route stayed."""
+        before = v.route[v.base :]
+        plan = self.replan(v.name, now)
+        self.replans += 1
+        if plan is None or v.route[v.base :] == before:
+            self.replans_unchanged += 1
+            count = min(self._unchanged.get(v.idx, (0, 0, 0))[0] + 1, 16)
+            self._unchanged[v.idx] = (count, v.passed, v.plan_id)
+        else:
+            self._unchanged.pop(v.idx, None)
+        return list(plan.releases) if plan is not None else []
 
     def _late(self, now: float) -> list[int]:
         """Vehicles whose plan reaches its next goal more than `improve_slack` s later than

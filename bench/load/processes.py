@@ -52,12 +52,13 @@ class Child:
         except psutil.NoSuchProcess:
             return []
 
-    def cpu_seconds(self) -> float:
+    def cpu_seconds(self, *, kernel_only: bool = False) -> float:
+        """CPU time of the process and its children (user + system, or system alone)."""
         total = 0.0
         for process in self.tree():
             try:
                 times = process.cpu_times()
-                total += times.user + times.system
+                total += times.system if kernel_only else times.user + times.system
             except psutil.NoSuchProcess:
                 pass
         return total

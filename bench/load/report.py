@@ -1,9 +1,20 @@
 """The figures of one load-benchmark run, from two samples taken around the window."""
 
 import argparse
+import math
 import os
 import platform
 from typing import Any
+
+PUMP_TICK_HZ = 10.0  # bench.load.run starts the pumps with --tick-hz 10
+# control counters reported as their growth in the window
+TRAFFIC_COUNTERS = ("traffic_searches_repeated", "traffic_replans", "traffic_replans_unchanged")
+
+
+def _on_ticks(interval: float, tick_hz: float = PUMP_TICK_HZ) -> float:
+    """The periodic state interval as the pumps keep it: a state falls due on the first tick
+    at least `interval` after the last one."""
+    return math.ceil(round(interval * tick_hz, 6)) / tick_hz
 
 
 def _delta_histogram_p(
@@ -45,6 +56,11 @@ def report(
 ) -> dict[str, Any]:
     wall = after["wall"] - before["wall"]
     cpu = {n: round((after["cpu"][n] - before["cpu"][n]) / wall, 4) for n in after["cpu"]}
+    kernel = {  # of that, in the kernel (sockets, select, page faults)
+        n: round((after["cpu_kernel"][n] - before["cpu_kernel"][n]) / wall, 4)
+        for n in after.get("cpu_kernel", {})
+        if n in before.get("cpu_kernel", {})
+    }
     db = {
         k: after["db"][k] - before["db"][k] for k in ("inserted", "updated", "deleted", "commits")
     }
@@ -62,8 +78,10 @@ def report(
             "by_topic_per_s": topics,
             "decode_errors": c1["counters"].get("decode_errors", 0),
             "handler_errors": c1["counters"].get("handler_errors", 0),
-            "traffic_searches_repeated": c1["counters"].get("traffic_searches_repeated", 0)
-            - c0["counters"].get("traffic_searches_repeated", 0),
+            **{
+                name: c1["counters"].get(name, 0) - c0["counters"].get(name, 0)
+                for name in TRAFFIC_COUNTERS
+            },
             "handling_p50_ms": _delta_histogram_p(
                 c0["handling_seconds"], c1["handling_seconds"], 0.5
             ),
@@ -116,6 +134,7 @@ def report(
         "registered_s": round(registered_s, 1),
         "load_average": {"start": before["load"], "end": after["load"]},
         "cpu_share": cpu,
+        "cpu_share_kernel": kernel,
         "control_cpu_vs_raw_subscriber": cpu_ratio,
         "memory_rss_mb": memory,
         "raw_subscriber": raw,
@@ -125,7 +144,7 @@ def report(
         "browser": probes["ws"],
         "db_rows_per_s": {k: round(v / wall, 1) for k, v in db.items()},
         "offered_per_s": {  # what the vehicles would send if the pumps got the CPU they need
-            "state": round(args.vehicles / args.state_interval, 1),
+            "state": round(args.vehicles / _on_ticks(args.state_interval), 1),
             "visualization": round(args.vehicles * args.visualization_hz, 1),
         },
         "targets": {
