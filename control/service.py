@@ -33,7 +33,11 @@ def build_control_loop() -> ControlLoop:
         liveness_probe_after=settings.FLEET_CONTROL.get("LIVENESS_PROBE_AFTER", PROBE_AFTER),
         motion_flush_interval=settings.FLEET_CONTROL.get("MOTION_FLUSH_INTERVAL", 0.0),
     )
-    client, address = make_client(settings.MQTT_URL, client_id_prefix="fleet-control")
+    client, address = make_client(
+        settings.MQTT_URL,
+        client_id_prefix="fleet-control",
+        read_pause=settings.FLEET_CONTROL.get("MQTT_READ_PAUSE", 0.0),
+    )
     link = MqttLink(client, address.host, address.port, controller)
     metrics = ControlMetrics(controller)  # counted in memory, snapshots to Redis for /metrics
     metrics.instrument(

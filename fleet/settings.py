@@ -205,6 +205,10 @@ FLEET_CONTROL = {
     # of their visualization messages) instead of rebuilding 2,000+ rows a second.
     "BROADCAST_ROWS_PER_S": env.float("FLEET_BROADCAST_ROWS_PER_S", default=1000.0),
     "SYNC_INTERVAL": env.float("FLEET_SYNC_INTERVAL", default=1.0),
+    # Seconds control's MQTT client waits at least between two socket reads: under load a
+    # read then brings a dozen messages instead of one or two (fewer wake-ups and system
+    # calls), for at most this much added latency (docs/LOAD.md, ninth round). 0 = off.
+    "MQTT_READ_PAUSE": env.float("FLEET_MQTT_READ_PAUSE", default=0.004),
     # Seconds between full reads of the active orders from the database (the syncs between
     # them work on the last read; a command, e.g. a cancellation, makes the next sync read).
     "ORDER_READ_INTERVAL": env.float("FLEET_ORDER_READ_INTERVAL", default=3.0),

@@ -278,3 +278,56 @@ def test_a_read_stops_at_a_publish_from_the_handler_and_writes_it_at_once() -> N
         client._sock = None
         left.close()
         right.close()
+
+
+def _reads_for_a_steady_stream(monkeypatch: pytest.MonkeyPatch, read_pause: float) -> int:
+    """Socket reads the buffered client makes for 200 messages sent 5 ms apart (all arrive,
+    in order)."""
+    host, port = _broker()
+    topic = f"buffered/{uuid.uuid4().hex[:8]}"
+    reads = []
+    fill = _BufferedSocket.fill
+
+    def counted(sock: _BufferedSocket) -> int:
+        reads.append(1)
+        return fill(sock)
+
+    received: list[bytes] = []
+    done, subscribed = threading.Event(), threading.Event()
+    client, _ = make_client(settings.MQTT_URL, client_id_prefix="paced", read_pause=read_pause)
+
+    def on_message(client: mqtt.Client, userdata: object, message: mqtt.MQTTMessage) -> None:
+        received.append(bytes(message.payload))
+        if len(received) == 200:
+            done.set()
+
+    client.on_message = on_message
+    client.on_subscribe = lambda *args: subscribed.set()
+    client.connect(host, port)
+    client.subscribe(topic, qos=0)
+    client.loop_start()
+    sender = _plain_client(host, port)
+    try:
+        assert subscribed.wait(5)
+        monkeypatch.setattr(_BufferedSocket, "fill", counted)
+        for i in range(200):
+            sender.publish(topic, str(i).encode(), qos=0)
+            time.sleep(0.005)
+        assert done.wait(10), f"{len(received)} of 200 arrived"
+        assert received == [str(i).encode() for i in range(200)]
+    finally:
+        monkeypatch.setattr(_BufferedSocket, "fill", fill)
+        for each in (client, sender):
+            each.disconnect()
+            each.loop_stop()
+    return len(reads)
+
+
+def test_a_read_pause_gathers_a_steady_stream_into_fewer_reads(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    at_once = _reads_for_a_steady_stream(monkeypatch, 0.0)
+    paced = _reads_for_a_steady_stream(monkeypatch, 0.05)
+    # 200 messages over at least a second: about one read per message, against one per 50 ms
+    assert paced <= 40
+    assert paced * 2 < at_once
