@@ -198,8 +198,7 @@ class Controller(PeriodicWork):
 
     def on_visualization(self, vehicle: LiveVehicle, message: vda5050.Visualization) -> None:
         if message.agv_position is not None:
-            vehicle.visual_position = message.agv_position
-            vehicle.needs_broadcast = True
+            vehicle.apply_pose(message.agv_position)
 
     def _reconcile(self, vehicle: LiveVehicle, *, reconnected: bool) -> None:
         """After a (re)connection ask for the current state and factsheet (REFERENCE H.38, J);

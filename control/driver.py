@@ -168,6 +168,7 @@ class OrderDriver:
             execution.released_until = _released_until(state)
             execution.update_id = execution.confirmed_update = state.order_update_id
             vehicle.execution = execution
+            vehicle.needs_broadcast = True  # its live row names the transport order
             self.progress.extend(execution.observe(state))
             return execution
         if order.cancel_requested:
@@ -188,6 +189,7 @@ class OrderDriver:
         if window is None or not self._send(vehicle, order, execution, window, update_id=0):
             return None
         vehicle.execution = execution
+        vehicle.needs_broadcast = True  # its live row names the transport order
         # From now on only the vehicle's state decides; the reconciler must not take it back.
         self.progress.append(Progress("sent", order.transport_order_id))
         return execution
@@ -232,6 +234,7 @@ class OrderDriver:
         if execution.attempts >= self.MAX_ATTEMPTS:
             execution.phase = Phase.DONE
             vehicle.execution = None
+            vehicle.needs_broadcast = True
             if self.traffic is not None:
                 self.traffic.ended(vehicle, time.monotonic())
             reason = (
