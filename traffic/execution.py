@@ -5,16 +5,18 @@ and costs microseconds. Step i of a route (i >= 1) holds the segment from node i
 (cleared when the vehicle reports node i) and node i (cleared when it reports node i+1). Base
 release extends over the longest prefix whose holds have no other vehicle queued ahead (see
 `traffic.reservations`), capped by the `ReleasePolicy`. A vehicle stopped by another one's hold
-is noted as its waiter and re-checked when that vehicle progresses or is planned anew.
+is noted as its waiter and re-checked when that vehicle progresses or is planned anew; with
+`switching` a vehicle stopped at its decision point by a late vehicle's unreleased hold may go
+ahead of it first (`traffic.switching`).
 """
 
 from __future__ import annotations
 
 from traffic.plans import Release, ReleasePolicy, Vehicle
-from traffic.queries import FleetQueries
+from traffic.switching import Switching
 
 
-class Execution(FleetQueries):
+class Execution(Switching):
     """Clearing and base release for a `TrafficManager` (a base class)."""
 
     policy: ReleasePolicy
@@ -64,6 +66,14 @@ class Execution(FleetQueries):
                 break
             edge, node = v.edge_holds[step], v.node_holds[step]
             blocker = (table.blocker(edge) if edge is not None else None) or table.blocker(node)
+            switched = (
+                blocker is not None
+                and self.switching
+                and b == v.passed
+                and self._switch(v, blocker, now)
+            )
+            if switched:
+                continue  # queued ahead of the late vehicle now: check the step again
             if blocker is not None:
                 v.blocked_by = blocker.vehicle
                 if not was_blocked:

@@ -27,10 +27,11 @@ from collections.abc import Callable, Sequence
 from contextlib import AbstractContextManager
 from dataclasses import replace
 
-from traffic.aside import Lifelong, through_traffic
+from traffic.aside import through_traffic
+from traffic.commit import Commit, planning_state
 from traffic.footprint import ConflictSets, VehicleClass
 from traffic.layout import Layout
-from traffic.plans import NO_HOLD, Goal, Plan, Release, ReleasePolicy, Vehicle
+from traffic.plans import Goal, Plan, Release, ReleasePolicy, Vehicle
 from traffic.reservations import INF, Hold, ReservationTable
 from traffic.sipp import ANY_HEADING, ClassGraph, Path, heading_key, search
 from traffic.timing import lower_bounds, propagate
@@ -49,7 +50,7 @@ class NoPlanError(Exception):
         self.releases = tuple(releases)
 
 
-class TrafficManager(Lifelong):
+class TrafficManager(Commit):
     """Plans, reservations and base releases for every vehicle of one layout.
 
     Built in layers: the queries (`waiting_for`, `wait_cycles`, `stalled`, ...) and
@@ -78,6 +79,9 @@ class TrafficManager(Lifelong):
         improve_budget: int = 0,
         improve_slack: float = 2.0,
         replan_backoff: int = 1,
+        switching: bool = False,
+        switch_push: float = 10.0,
+        switch_steps: int = 16,
     ) -> None:
         self.layout = layout
         # a re-plan may serve the next goal at the decision point (the route then ends or
@@ -126,6 +130,13 @@ class TrafficManager(Lifelong):
         self.replan_backoff = replan_backoff
         self._unchanged: dict[int, tuple[int, int, int]] = {}  # idx -> (count, passed, plan)
         self.replans = self.replans_unchanged = 0  # the tick's re-plans of waiting vehicles
+        # opt-in: a vehicle waiting at its decision point behind a late vehicle's unreleased
+        # holds may go ahead of it over a stretch of at most `switch_steps` steps, pushing the
+        # late one's plan back by at most `switch_push` s (`traffic.switching`)
+        self.switching = switching
+        self.switch_push = switch_push
+        self.switch_steps = switch_steps
+        self.switches = self.switch_pushes = self.switches_dropped = 0
         self._vehicles: list[Vehicle] = []
         self._index: dict[str, int] = {}
         self._waiters: dict[int, set[int]] = {}
@@ -259,10 +270,10 @@ class TrafficManager(Lifelong):
         if self.unlocked is None:
             path = self._search(run, None)
         else:
-            before, since = _planning_state(v), self.table.clock
+            before, since = planning_state(v), self.table.clock
             path = self._search(run, self.unlocked)
             if path is not None and not (
-                _planning_state(v) == before and self._fits(v, path, since)
+                planning_state(v) == before and self._fits(v, path, since)
             ):
                 # the table or the vehicle changed under the search: again, held this time
                 self.searches_repeated += 1
@@ -287,99 +298,6 @@ class TrafficManager(Lifelong):
             again = run(max_expansions=self.max_expansions, weight=fallback, unlocked=unlocked)
             path = again or path
         return path
-
-    def _fits(self, v: Vehicle, path: Path, since: int) -> bool:
-        """Whether `path`, searched from table clock `since` on, still fits from `v`'s decision
-        point: every step's segment and node hold inside a safe interval, and the start left
-        before another vehicle's queued hold there (what the search checked, asked again of
-        the lists that changed since)."""
-        table, me, nodes = self.table, v.idx, path.nodes
-        leave = path.arrive[1] if len(nodes) > 1 else INF
-        if table.changed_since(nodes[0], since) and leave > table.first_other_start(nodes[0], me):
-            return False
-        for j in range(1, len(nodes)):
-            enter = path.depart[j - 1]
-            left = path.arrive[j + 1] if j + 1 < len(nodes) else INF
-            segment = self._segment[(nodes[j - 1], nodes[j])]
-            for resource, end in ((segment, path.arrive[j]), (nodes[j], left)):
-                if table.changed_since(resource, since) and not table.admits(
-                    resource, me, enter, end
-                ):
-                    return False
-        return True
-
-    def _remaining(self, v: Vehicle, graph: ClassGraph) -> float:
-        """Seconds the vehicle still needs to its decision point, driving without waiting."""
-        seconds = 0.0
-        for i in range(v.passed, v.base):
-            seconds += graph.turn(v.headings[i], v.headings[i + 1])
-            seconds += graph.travel[(v.route[i], v.route[i + 1])]
-        return seconds
-
-    def _commit(
-        self,
-        v: Vehicle,
-        path: Path,
-        goals: list[tuple[int, float]],
-        now: float,
-        *,
-        hold: bool = False,
-    ) -> list[Release]:
-        """Put `path` into the table from the vehicle's decision point, then release.
-
-        A vehicle at the end of its route, or standing at the goal its base stops at, starts a
-        new route (new `plan_id`); one still driving keeps its base and gets a new horizon.
-        With `hold` the base will stop at the last goal (a refuge path, `traffic.aside`).
-        """
-        b = v.base
-        table, conflicts = self.table, self.conflicts
-        new = v.passed == b and (b == len(v.route) - 1 or b == v.hold_at)
-        for i in range(len(v.route) - 1, b, -1):
-            edge = v.edge_holds[i]
-            if edge is not None:
-                table.remove(edge)
-            table.remove(v.node_holds[i])
-        v.truncate(b)
-        if new:
-            v.restart(path.nodes[0])
-            b = 0
-        v.node_holds[b].end = path.arrive[1] if len(path.nodes) > 1 else INF
-        table.ended(v.node_holds[b])
-        for j in range(1, len(path.nodes)):
-            i = b + j
-            u, n = path.nodes[j - 1], path.nodes[j]
-            seg = self._segment[(u, n)]
-            dep, end = path.depart[j - 1], path.arrive[j + 1] if j + 1 < len(path.nodes) else INF
-            edge = Hold(v.idx, seg, i, dep, path.arrive[j], conflicts.of(v.cls, seg))
-            node = Hold(v.idx, n, i, dep, end, conflicts.of(v.cls, n))
-            table.add(edge)
-            table.add(node)
-            v.append(
-                n,
-                path.arrive[j],
-                path.depart[j],
-                path.headings[j],
-                (edge, node),
-                self._length[(u, n)],
-            )
-        v.depart[b] = path.depart[0]
-        v.goals = goals
-        stops = [b + s for s in path.stops]
-        v.stops = stops + [len(v.route) + 10**9] * (len(goals) - len(stops))
-        v.complete = path.complete
-        v.hold_at = stops[-1] if hold and path.complete and stops else NO_HOLD
-        if b in stops[:1] and v.passed == b and not new:
-            v.ready_at = max(v.ready_at, v.arrive[b] + goals[0][1])
-        releases: list[Release] = []
-        own = self._extend(v, now)
-        if own is None and not new and b == len(v.route) - 1:
-            # the last goal is served at the decision point: no base to extend, but the caller
-            # must learn that the route ends there (an order update without a horizon)
-            own = Release(v.name, v.plan_id, b, b)
-        if own is not None:
-            releases.append(own)
-        releases.extend(self._wake(v.idx, now))
-        return releases
 
     # -- housekeeping -------------------------------------------------------------------------
 
@@ -467,9 +385,3 @@ class TrafficManager(Lifelong):
                 late.append((-lateness, v.idx))
         late.sort()
         return [idx for _, idx in late]
-
-
-def _planning_state(v: Vehicle) -> tuple[object, ...]:
-    """What a search of `v` starts from (a path searched unlocked is kept only if unchanged)."""
-    return (v.plan_id, v.first_index, v.base, v.passed, len(v.route), v.static, v.ready_at,
-            v.hold_at, v.route[v.base])  # fmt: skip

@@ -86,6 +86,7 @@ class Vehicle:
         self.blocked_by = -1  # the vehicle it waits for at its decision point
         self.blocked_since = now
         self.replanned_at = -INF
+        self.switch_tried_at = -INF  # last time it tried to go ahead of a late vehicle
         self.static = False
         self.last_progress = now
         self.hold_at = NO_HOLD  # the base stops at this route index (goal_refuge: the last goal)

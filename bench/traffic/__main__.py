@@ -39,14 +39,25 @@ def main() -> None:
         help="S1/S3: a vehicle s seconds without progress is re-timed GROWTH*s past its "
         "earliest departure (fewer pushes of long waits; 0: off)",
     )
+    parser.add_argument(
+        "--switch-push",
+        default="off",
+        help="SECONDS: a vehicle waiting behind a late one may go ahead of it, pushing its plan "
+        "back at most this long (traffic.switching); 'off' (default): no switching",
+    )
     args = parser.parse_args()
+    switch_push = None if args.switch_push == "off" else float(args.switch_push)
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
         figures: dict[str, Any]
         lifelong = args.lifelong == "on" if args.lifelong else name == "S2"
         if name == "S2":
             figures = scenarios.s2(
-                quick=args.quick, seed=args.seed, instances=args.instances, lifelong=lifelong
+                quick=args.quick,
+                seed=args.seed,
+                instances=args.instances,
+                lifelong=lifelong,
+                switch_push=switch_push,
             )
         else:
             runner = scenarios.s1 if name == "S1" else scenarios.s3
@@ -66,6 +77,7 @@ def main() -> None:
                 lifelong=lifelong,
                 retime_slack=args.retime_slack,
                 retime_growth=args.retime_growth,
+                switch_push=switch_push,
             )
         figures["quick"] = args.quick
         print(f"== {name}")

@@ -112,10 +112,12 @@ def fleet_manager(
     retime_growth: float = 0.0,
     improve_budget: int = 0,
     improve_slack: float = 2.0,
+    switch_push: float | None = None,
 ) -> TrafficManager:
     """A manager with vehicles `v0..` standing at `starts` (node id, heading).
 
-    `lifelong` turns on the opt-in goal refuges and stepping aside (`traffic.aside`).
+    `lifelong` turns on the opt-in goal refuges and stepping aside (`traffic.aside`);
+    `switch_push` (seconds, None: off) the opt-in switching (`traffic.switching`).
     """
     manager = TrafficManager(
         layout,
@@ -132,6 +134,8 @@ def fleet_manager(
         retime_growth=retime_growth,
         improve_budget=improve_budget,
         improve_slack=improve_slack,
+        switching=switch_push is not None,
+        switch_push=switch_push or 0.0,
     )
     for i, (node, heading) in enumerate(starts):
         manager.add_vehicle(f"v{i}", node, 0.0, heading=heading)
@@ -268,6 +272,9 @@ def figures(result: Run, *, sample: int = 1500, seed: int = 0) -> dict[str, Any]
         "release_cpu_us_p99": _round(_pct(release_cpu_us, 99)),
         "tick_cpu_ms_p50": _round(_pct(tick_cpu_ms, 50)),
         "tick_cpu_ms_p95": _round(_pct(tick_cpu_ms, 95)),
+        "switches": manager.switches,
+        "switches_pushing_the_late_vehicle": manager.switch_pushes,
+        "switch_pushes_dropped": manager.switches_dropped,
         "wall_s": _round(result.wall),
         "stall_chains": stats.stall_chains,
     }

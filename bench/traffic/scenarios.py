@@ -57,6 +57,7 @@ def warehouse_scenario(
     lifelong: bool = False,
     retime_slack: float = 2.0,
     retime_growth: float = 0.0,
+    switch_push: float | None = None,
 ) -> dict[str, Any]:
     """Vehicles start at distinct workstations and run pick -> drop orders for `hours`.
 
@@ -76,6 +77,7 @@ def warehouse_scenario(
         lifelong=lifelong,
         retime_slack=retime_slack,
         retime_growth=retime_growth,
+        switch_push=switch_push,
     )
     setup = time.perf_counter() - began
     # A vehicle whose tour cannot be planned now tries again after 1, 2, 4, … 30 s: on S3 a drop
@@ -110,6 +112,7 @@ def warehouse_scenario(
         lifelong=lifelong,
         retime_slack=retime_slack,
         retime_growth=retime_growth,
+        switch_push=switch_push,
         delay="5% of moves +5-30 s",
         setup_s=round(setup, 2),
     )
@@ -125,6 +128,7 @@ def s1(
     lifelong: bool = False,
     retime_slack: float = 2.0,
     retime_growth: float = 0.0,
+    switch_push: float | None = None,
 ) -> dict[str, Any]:
     """S1: warehouse-10-20-10-2-1 pattern, 100 vehicles (rho >= 0.85, plan p95 <= 25 ms)."""
     grid = warehouse()
@@ -140,6 +144,7 @@ def s1(
         lifelong=lifelong,
         retime_slack=retime_slack,
         retime_growth=retime_growth,
+        switch_push=switch_push,
     )
 
 
@@ -152,6 +157,7 @@ def s3(
     lifelong: bool = False,
     retime_slack: float = 2.0,
     retime_growth: float = 0.0,
+    switch_push: float | None = None,
 ) -> dict[str, Any]:
     """S3: 1,000 vehicles on a 500×140 warehouse (targets: rho >= 0.7, plan p95 <= 150 ms)."""
     grid = warehouse(block_cols=36, block_rows=45, margin=51, station_cols=8)
@@ -168,6 +174,7 @@ def s3(
         lifelong=lifelong,
         retime_slack=retime_slack,
         retime_growth=retime_growth,
+        switch_push=switch_push,
     )
 
 
@@ -190,7 +197,12 @@ class LorrTasks:
 
 
 def s2(
-    *, quick: bool, seed: int, instances: Sequence[str] = (), lifelong: bool = True
+    *,
+    quick: bool,
+    seed: int,
+    instances: Sequence[str] = (),
+    lifelong: bool = True,
+    switch_push: float | None = None,
 ) -> dict[str, Any]:
     """S2: LoRR random-32-32-20, errands within the step limit vs best-known (target >= 60 %).
 
@@ -203,6 +215,7 @@ def s2(
         "seed": seed,
         "rules": "LoRR 2023, no delays",
         "lifelong": lifelong,
+        "switch_push": switch_push,
     }
     for name in names:
         instance = lorr(name)
@@ -220,6 +233,7 @@ def s2(
             replan_after=S2_REPLAN_AFTER if lifelong else 5.0,
             improve_budget=S2_IMPROVE_BUDGET if lifelong else 0,
             improve_slack=S2_IMPROVE_SLACK,
+            switch_push=switch_push,
         )
         config = SimConfig(
             seed=seed,
@@ -247,6 +261,7 @@ def s2(
                 f"{key}_deadlocks_wait_cycles": figs["deadlocks_wait_cycles"],
                 f"{key}_deadlocks_stalls": figs["deadlocks_stalls"],
                 f"{key}_plan_failures": figs["plan_failures"],
+                f"{key}_switches": figs["switches"],
                 f"{key}_plan_ms_p95": figs["plan_ms_p95"],
                 f"{key}_release_us_p95": figs["release_us_p95"],
                 f"{key}_wall_s": figs["wall_s"],

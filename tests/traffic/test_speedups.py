@@ -124,20 +124,39 @@ from tests.traffic.test_planning_speed import busy_grid
 from traffic import speedups
 m, sim, tasks = busy_grid()
 stats = sim.run(400.0)
+done = tasks.done
+{report}
+"""
+
+# switching on (`traffic.switching`): the switches push late vehicles through `propagate`
+RUN_SWITCHING = """
+import json
+from tests.traffic.test_switching import small_warehouse
+from traffic import speedups
+from traffic.des import SimConfig, Simulation
+m, tasks = small_warehouse(seed=1)
+stats = Simulation(m, tasks, SimConfig(seed=1, retry_backoff=2.0, reassign_after=3)).run(600.0)
+done = [m.switches, m.switch_pushes, m.switches_dropped]
+{report}
+"""
+
+REPORT = """
 plans = {v.name: (v.route, v.arrive, v.depart) for v in m._vehicles}
 holds = sorted(repr(h) for queue in m.table.blocked for h in queue)
 outcome = [repr(stats.tasks), stats.collisions, stats.wait_cycles, stats.stalls, stats.moves,
            stats.delays, stats.waits]
-print(json.dumps([speedups.COMPILED is not None, outcome, tasks.done, plans, holds]))
+print(json.dumps([speedups.COMPILED is not None, outcome, done, plans, holds]))
 """
 
 
 @needs_native
-def test_a_delayed_run_retimes_and_holds_the_same_compiled_and_plain() -> None:
+@pytest.mark.parametrize("script", [RUN, RUN_SWITCHING], ids=["busy-grid", "switching"])
+def test_a_delayed_run_retimes_and_holds_the_same_compiled_and_plain(script: str) -> None:
     def run(pure: str) -> list[Any]:
         env = os.environ | {"FLEET_TRAFFIC_PURE": pure}
+        code = script.format(report=REPORT)
         out = subprocess.run(
-            [sys.executable, "-c", RUN], env=env, capture_output=True, text=True, check=True
+            [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
         )
         result: list[Any] = json.loads(out.stdout)
         return result

@@ -1,0 +1,120 @@
+"""Putting a searched path into the reservation table, and the checks around a search.
+
+Split from `traffic.manager` (which searches): `_commit` replaces a vehicle's unreleased steps
+with a new path's holds and releases what it can; `_fits` re-checks a path searched while the
+table was open to other threads; `_remaining` is the time a vehicle still drives to its
+decision point. `TrafficManager` inherits them.
+"""
+
+from __future__ import annotations
+
+from traffic.aside import Lifelong
+from traffic.plans import NO_HOLD, Release, Vehicle
+from traffic.reservations import INF, Hold
+from traffic.sipp import ClassGraph, Path
+
+
+class Commit(Lifelong):
+    """Committing paths to the table (a `TrafficManager` base class)."""
+
+    _segment: dict[tuple[int, int], int]
+    _length: dict[tuple[int, int], float]
+
+    def _fits(self, v: Vehicle, path: Path, since: int) -> bool:
+        """Whether `path`, searched from table clock `since` on, still fits from `v`'s decision
+        point: every step's segment and node hold inside a safe interval, and the start left
+        before another vehicle's queued hold there (what the search checked, asked again of
+        the lists that changed since)."""
+        table, me, nodes = self.table, v.idx, path.nodes
+        leave = path.arrive[1] if len(nodes) > 1 else INF
+        if table.changed_since(nodes[0], since) and leave > table.first_other_start(nodes[0], me):
+            return False
+        for j in range(1, len(nodes)):
+            enter = path.depart[j - 1]
+            left = path.arrive[j + 1] if j + 1 < len(nodes) else INF
+            segment = self._segment[(nodes[j - 1], nodes[j])]
+            for resource, end in ((segment, path.arrive[j]), (nodes[j], left)):
+                if table.changed_since(resource, since) and not table.admits(
+                    resource, me, enter, end
+                ):
+                    return False
+        return True
+
+    def _remaining(self, v: Vehicle, graph: ClassGraph) -> float:
+        """Seconds the vehicle still needs to its decision point, driving without waiting."""
+        seconds = 0.0
+        for i in range(v.passed, v.base):
+            seconds += graph.turn(v.headings[i], v.headings[i + 1])
+            seconds += graph.travel[(v.route[i], v.route[i + 1])]
+        return seconds
+
+    def _commit(
+        self,
+        v: Vehicle,
+        path: Path,
+        goals: list[tuple[int, float]],
+        now: float,
+        *,
+        hold: bool = False,
+    ) -> list[Release]:
+        """Put `path` into the table from the vehicle's decision point, then release.
+
+        A vehicle at the end of its route, or standing at the goal its base stops at, starts a
+        new route (new `plan_id`); one still driving keeps its base and gets a new horizon.
+        With `hold` the base will stop at the last goal (a refuge path, `traffic.aside`).
+        """
+        b = v.base
+        table, conflicts = self.table, self.conflicts
+        new = v.passed == b and (b == len(v.route) - 1 or b == v.hold_at)
+        for i in range(len(v.route) - 1, b, -1):
+            edge = v.edge_holds[i]
+            if edge is not None:
+                table.remove(edge)
+            table.remove(v.node_holds[i])
+        v.truncate(b)
+        if new:
+            v.restart(path.nodes[0])
+            b = 0
+        v.node_holds[b].end = path.arrive[1] if len(path.nodes) > 1 else INF
+        table.ended(v.node_holds[b])
+        for j in range(1, len(path.nodes)):
+            i = b + j
+            u, n = path.nodes[j - 1], path.nodes[j]
+            seg = self._segment[(u, n)]
+            dep, end = path.depart[j - 1], path.arrive[j + 1] if j + 1 < len(path.nodes) else INF
+            edge = Hold(v.idx, seg, i, dep, path.arrive[j], conflicts.of(v.cls, seg))
+            node = Hold(v.idx, n, i, dep, end, conflicts.of(v.cls, n))
+            table.add(edge)
+            table.add(node)
+            v.append(
+                n,
+                path.arrive[j],
+                path.depart[j],
+                path.headings[j],
+                (edge, node),
+                self._length[(u, n)],
+            )
+        v.depart[b] = path.depart[0]
+        v.goals = goals
+        stops = [b + s for s in path.stops]
+        v.stops = stops + [len(v.route) + 10**9] * (len(goals) - len(stops))
+        v.complete = path.complete
+        v.hold_at = stops[-1] if hold and path.complete and stops else NO_HOLD
+        if b in stops[:1] and v.passed == b and not new:
+            v.ready_at = max(v.ready_at, v.arrive[b] + goals[0][1])
+        releases: list[Release] = []
+        own = self._extend(v, now)
+        if own is None and not new and b == len(v.route) - 1:
+            # the last goal is served at the decision point: no base to extend, but the caller
+            # must learn that the route ends there (an order update without a horizon)
+            own = Release(v.name, v.plan_id, b, b)
+        if own is not None:
+            releases.append(own)
+        releases.extend(self._wake(v.idx, now))
+        return releases
+
+
+def planning_state(v: Vehicle) -> tuple[object, ...]:
+    """What a search of `v` starts from (a path searched unlocked is kept only if unchanged)."""
+    return (v.plan_id, v.first_index, v.base, v.passed, len(v.route), v.static, v.ready_at,
+            v.hold_at, v.route[v.base])  # fmt: skip

@@ -1,0 +1,233 @@
+"""Switching two vehicles' order on a shared stretch (opt-in): a switchable ADG.
+
+The plain ADG keeps every resource's queue in the order the plans were made. When the vehicle
+first in a queue is late (standing in a delay, waiting itself, or still far away), a vehicle
+queued behind it that stands ready at its decision point waits although the resource is free.
+With `TrafficManager(switching=True)` such a waiting vehicle W may go ahead of the late one L
+over a short **stretch** of its route (in the spirit of Berndt et al.'s switchable action
+dependency graph): W's unreleased steps b+1..k (b its decision point) are re-timed to the
+earliest W can drive them, queued ahead of L's holds there, and L is re-timed after them.
+
+Why this keeps the release guarantee. Collision-freedom does not depend on the order: a hold
+is entered only when no other vehicle's hold is queued ahead of it in its list, and a released
+hold stays at the front. Deadlock-freedom rests on one invariant: the stored plan times are a
+consistent schedule for the queues, i.e. in every list two conflicting holds of different
+vehicles do not overlap in plan time and are queued in time order, and each vehicle's own steps
+follow each other in time. Then every wait points forward in plan time and the wait-for graph
+is acyclic whatever the delays (`traffic.reservations`). A switch keeps that invariant in two
+steps, each of which keeps it on its own:
+
+1. **L is re-timed later** (if W's stretch does not fit before L's holds already): one push
+   "L departs from index j-1 no earlier than T" through `propagate`, the re-timing every tick
+   does; it changes no order, so the schedule stays consistent (and the push terminates).
+2. **W's stretch is re-timed earlier** to times that, with every other hold as it now is,
+   overlap no other vehicle's hold (`ReservationTable.admits`, asked for each hold of the
+   stretch), and that W's unchanged rest still follows (it arrives at k before it planned to
+   leave k). The stretch's holds are then queued again by their new start, so each list is in
+   time order.
+
+If step 2's check fails after step 1 (a rare side effect of the push on a third vehicle), the
+switch is dropped: L's later times are a push like any other. Only unreleased holds change
+places (a base is never revoked), and only L's: every other vehicle's hold that W's new times
+would overlap makes the switch fail. A switch is made only when W's first step can then be
+released at once, so each switch moves a vehicle (no two vehicles switch back and forth
+without progress), and a vehicle tries at most once per `SWITCH_EVERY` seconds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+from traffic.plans import Vehicle
+from traffic.queries import FleetQueries
+from traffic.reservations import INF, Hold
+from traffic.sipp import ClassGraph
+from traffic.timing import propagate, stay
+
+# a stretch's new departures from b..k-1 and arrivals at b+1..k (b: the decision point)
+Schedule = tuple[list[float], list[float]]
+
+SWITCH_EVERY = 1.0  # s between two switch tries of one waiting vehicle
+OVERDUE_GRACE = 1.0  # s past its move's duration after which a driving vehicle counts as late
+
+
+class Switching(FleetQueries):
+    """Letting a waiting vehicle go ahead of a late one (a `TrafficManager` base class)."""
+
+    graphs: list[ClassGraph]
+    switching: bool
+    # s: the most a switch may push the late vehicle's plan back (0: only switches that fit
+    # before it as planned)
+    switch_push: float
+    switch_steps: int  # the longest stretch a switch moves (steps)
+    switches: int  # switches made
+    switch_pushes: int  # of which pushed the late vehicle
+    switches_dropped: int  # pushes made whose switch then failed its check
+
+    def _switch(self, w: Vehicle, blocker: Hold, now: float) -> bool:
+        """Let `w`, standing at its decision point and stopped by `blocker` on its next step,
+        go ahead of `blocker`'s vehicle over a stretch of its route; True if it did."""
+        if blocker.released or now - w.switch_tried_at < SWITCH_EVERY:
+            return False
+        w.switch_tried_at = now
+        late = self._vehicles[blocker.vehicle]
+        if late.static or w.passed != w.base:
+            return False
+        k = self._stretch(w, late)
+        if k < 0:
+            return False
+        times = _earliest(w, self.graphs[w.cls], k, now)
+        if times is None:
+            return False
+        push = self._push_needed(w, late, k, times)
+        if push is None:
+            return False
+        j, at = push
+        if j >= 0:
+            delay = at - late.depart[j - 1]
+            gain = w.depart[w.base] - times[0][0]
+            # a stuck vehicle's plan times are optimistic (re-timing assumes it goes on at
+            # once), so the push costs it less than it says; one on time must lose less than
+            # w gains
+            if delay > self.switch_push or (delay >= gain and not self._stuck(late, now)):
+                return False
+            propagate(self._vehicles, self.table, self.graphs, [(at, late.idx, j - 1)])
+            self.switch_pushes += 1
+        if not self._fits_ahead(w, k, times):
+            self.switches_dropped += j >= 0
+            return False
+        self._retime_stretch(w, k, times)
+        self._waiters.setdefault(w.idx, set()).add(late.idx)
+        self.switches += 1
+        return True
+
+    def _stretch(self, w: Vehicle, late: Vehicle) -> int:
+        """The last route index k of the stretch: the first node from w's decision point on
+        that `late` is not queued to pass before w; -1 if none within `switch_steps`."""
+        b, last, blocked = w.base, len(w.route) - 1, self.table.blocked
+        for k in range(b + 1, min(last, b + self.switch_steps) + 1):
+            mine = w.node_holds[k]
+            ahead = False
+            for hold in blocked[mine.resource]:
+                if hold is mine:
+                    break
+                if hold.vehicle == late.idx:
+                    if hold.released:
+                        return -1  # it is there already
+                    ahead = True
+                    break
+            if not ahead:
+                return k
+        return -1
+
+    def _stuck(self, late: Vehicle, now: float) -> bool:
+        """Whether `late` is held up: stopped at its decision point (waiting or handling),
+        or overdue on the move it drives (a delay)."""
+        p = late.passed
+        if late.base == p:
+            return True
+        graph = self.graphs[late.cls]
+        move = graph.travel[(late.route[p], late.route[p + 1])]
+        move += graph.turn(late.headings[p], late.headings[p + 1])
+        return now - late.last_progress > move + OVERDUE_GRACE
+
+    def _push_needed(
+        self, w: Vehicle, late: Vehicle, k: int, times: Schedule
+    ) -> tuple[int, float] | None:
+        """How `late` must be re-timed for w's stretch to go first: (-1, 0) not at all,
+        (j, t) no departure from its index j-1 before t; None if a switch is not possible.
+
+        Every unreleased hold of `late` queued on the stretch before w's new hold ends goes
+        behind it, so `late` waits before the whole stretch (at j-1, which must not conflict
+        with the stretch); any other hold that w's new times would overlap (another vehicle's,
+        or one `late` has entered) rules the switch out.
+        """
+        table, me, them = self.table, w.idx, late.idx
+        spans = list(_spans(w, k, times))
+        j = INF
+        for hold, start, end in spans:
+            for other in table.blocked[hold.resource]:
+                if other.vehicle == me or other.key >= end:
+                    continue
+                if other.vehicle == them and not other.released:
+                    j = min(j, other.index)
+                elif other.end > start:
+                    return None
+        if j == INF:
+            return -1, 0.0
+        first = int(j)
+        waits_at = late.node_holds[first - 1].conflicts
+        at = -INF
+        for hold, _, end in spans:
+            if hold.resource in waits_at:
+                return None  # late would wait for w on a node w's stretch needs
+            for other in table.blocked[hold.resource]:
+                if other.vehicle == them and other.index >= first and other.key < end:
+                    at = max(at, end)
+        return first, at
+
+    def _fits_ahead(self, w: Vehicle, k: int, times: Schedule) -> bool:
+        """Whether w's stretch at `times` overlaps no other vehicle's hold, and its first step
+        then has nobody queued ahead (so w leaves at once)."""
+        table, me = self.table, w.idx
+        for hold, start, end in _spans(w, k, times):
+            if not table.admits(hold.resource, me, start, end):
+                return False
+            if hold.index == w.base + 1 and any(
+                other.vehicle != me and other.key <= start for other in table.blocked[hold.resource]
+            ):
+                return False
+        return True
+
+    def _retime_stretch(self, w: Vehicle, k: int, times: Schedule) -> None:
+        """Give w's stretch its new times and queue its holds again by their new start."""
+        table, b = self.table, w.base
+        spans = list(_spans(w, k, times))
+        for hold, _, _ in spans:
+            table.remove(hold)
+        for hold, start, end in spans:
+            hold.start = hold.key = start
+            hold.end = end
+            table.add(hold)
+        departs, arrives = times
+        for n in range(k - b):
+            w.depart[b + n] = departs[n]
+            w.arrive[b + n + 1] = arrives[n]
+        here = w.node_holds[b]
+        here.end = w.arrive[b + 1]
+        table.ended(here)
+
+
+def _earliest(w: Vehicle, graph: ClassGraph, k: int, now: float) -> Schedule | None:
+    """The earliest departures of w from route indices b..k-1 (b its decision point) and
+    arrivals at b+1..k, driving without waiting; None if that is not earlier than planned or
+    misses w's planned departure from k (its unchanged rest must still follow)."""
+    b = w.base
+    depart = max(now, w.ready_at) + graph.turn(w.headings[b], w.headings[b + 1])
+    if depart >= w.depart[b]:
+        return None
+    departs: list[float] = []
+    arrives: list[float] = []
+    for i in range(b + 1, k + 1):
+        departs.append(depart)
+        arrive = depart + graph.travel[(w.route[i - 1], w.route[i])]
+        arrives.append(arrive)
+        if i < len(w.route) - 1:
+            depart = arrive + stay(w, graph, i)
+    if k < len(w.route) - 1 and depart > w.depart[k]:
+        return None
+    return departs, arrives
+
+
+def _spans(w: Vehicle, k: int, times: Schedule) -> Iterator[tuple[Hold, float, float]]:
+    """(hold, new start, new end) of each hold of w's stretch b+1..k at `times` (the node
+    hold at k keeps its end: w leaves k as planned)."""
+    departs, arrives = times
+    b = w.base
+    for i in range(b + 1, k + 1):
+        n = i - b - 1
+        edge = w.edge_holds[i]
+        assert edge is not None  # every step after the first has its segment hold
+        yield edge, departs[n], arrives[n]
+        node = w.node_holds[i]
+        yield node, departs[n], (arrives[n + 1] if i < k else node.end)
