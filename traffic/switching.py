@@ -79,25 +79,19 @@ class Switching(FleetQueries):
         times = _earliest(w, self.graphs[w.cls], k, now)
         if times is None:
             return False
-        push = self._push_needed(w, late, k, times)
-        if push is None:
+        pushes = self._pushes(w, late, k, times, now)
+        if pushes is None:
             return False
-        j, at = push
-        if j >= 0:
-            delay = at - late.depart[j - 1]
-            gain = w.depart[w.base] - times[0][0]
-            # a stuck vehicle's plan times are optimistic (re-timing assumes it goes on at
-            # once), so the push costs it less than it says; one on time must lose less than
-            # w gains
-            if delay > self.switch_push or (delay >= gain and not self._stuck(late, now)):
-                return False
-            propagate(self._vehicles, self.table, self.graphs, [(at, late.idx, j - 1)])
+        if pushes:
+            propagate(self._vehicles, self.table, self.graphs, pushes)
             self.switch_pushes += 1
         if not self._fits_ahead(w, k, times):
-            self.switches_dropped += j >= 0
+            self.switches_dropped += bool(pushes)
             return False
         self._retime_stretch(w, k, times)
-        self._waiters.setdefault(w.idx, set()).add(late.idx)
+        waiters = self._waiters.setdefault(w.idx, set())
+        waiters.update(idx for _, idx, _ in pushes)
+        waiters.add(late.idx)
         self.switches += 1
         return True
 
@@ -131,40 +125,92 @@ class Switching(FleetQueries):
         move += graph.turn(late.headings[p], late.headings[p + 1])
         return now - late.last_progress > move + OVERDUE_GRACE
 
-    def _push_needed(
-        self, w: Vehicle, late: Vehicle, k: int, times: Schedule
-    ) -> tuple[int, float] | None:
-        """How `late` must be re-timed for w's stretch to go first: (-1, 0) not at all,
-        (j, t) no departure from its index j-1 before t; None if a switch is not possible.
+    def _pushes(
+        self, w: Vehicle, late: Vehicle, k: int, times: Schedule, now: float
+    ) -> list[tuple[float, int, int]] | None:
+        """The re-timing pushes (time, vehicle, index) that put every hold w's stretch must
+        pass behind w's new hold: [] if the stretch fits as planned; None if no switch.
 
-        Every unreleased hold of `late` queued on the stretch before w's new hold ends goes
-        behind it, so `late` waits before the whole stretch (at j-1, which must not conflict
-        with the stretch); any other hold that w's new times would overlap (another vehicle's,
-        or one `late` has entered) rules the switch out.
+        The vehicles that go behind are `late` and every vehicle with an unreleased hold that
+        w's new times overlap; each of their unreleased holds queued on the stretch before w's
+        new hold there ends must start after it (from the first of them on). A released hold
+        in the way rules the switch out, and so does a vehicle that would lose more than
+        `switch_push` s, or more than w gains while it is not held up itself (a plan that
+        is on time must not pay more than the switch buys). A vehicle that goes behind must
+        not be kept waiting on a node the stretch needs (it would wait for w while w waits
+        for it): its waiting node's hold must not overlap the stretch.
         """
-        table, me, them = self.table, w.idx, late.idx
+        table, me = self.table, w.idx
         spans = list(_spans(w, k, times))
-        j = INF
+        behind = {late.idx}
         for hold, start, end in spans:
             for other in table.blocked[hold.resource]:
-                if other.vehicle == me or other.key >= end:
-                    continue
-                if other.vehicle == them and not other.released:
-                    j = min(j, other.index)
-                elif other.end > start:
-                    return None
-        if j == INF:
-            return -1, 0.0
-        first = int(j)
-        waits_at = late.node_holds[first - 1].conflicts
-        at = -INF
+                if other.vehicle != me and other.key < end and other.end > start:
+                    if other.released:
+                        return None
+                    behind.add(other.vehicle)
+        first: dict[int, int] = {}
         for hold, _, end in spans:
-            if hold.resource in waits_at:
-                return None  # late would wait for w on a node w's stretch needs
             for other in table.blocked[hold.resource]:
-                if other.vehicle == them and other.index >= first and other.key < end:
-                    at = max(at, end)
-        return first, at
+                if other.vehicle in behind and not other.released and other.key < end:
+                    first[other.vehicle] = min(first.get(other.vehicle, other.index), other.index)
+        pushes: dict[tuple[int, int], float] = {}
+        for hold, _, end in spans:
+            for other in table.blocked[hold.resource]:
+                v = other.vehicle
+                if v in first and other.index >= first[v] and other.key < end:
+                    step = (v, other.index - 1)
+                    pushes[step] = max(pushes.get(step, -INF), end)
+        if not self._affordable(pushes, w.depart[w.base] - times[0][0], now):
+            return None
+        if self._waits_after_stretch(w, k, first):
+            return None
+        for v, j in first.items():
+            if self._waits_on_stretch(self._vehicles[v], j, pushes, spans):
+                return None
+        return [(at, v, i) for (v, i), at in pushes.items() if at > self._vehicles[v].depart[i]]
+
+    def _affordable(self, pushes: dict[tuple[int, int], float], gain: float, now: float) -> bool:
+        """Whether no vehicle would lose more than `switch_push` s, nor (on time, not held up)
+        more than w gains (`gain` s)."""
+        lost: dict[int, float] = {}
+        for (v, i), at in pushes.items():
+            lost[v] = max(lost.get(v, 0.0), at - self._vehicles[v].depart[i])
+        return all(
+            delay <= self.switch_push and (delay < gain or self._stuck(self._vehicles[v], now))
+            for v, delay in lost.items()
+        )
+
+    def _waits_after_stretch(self, w: Vehicle, k: int, first: dict[int, int]) -> bool:
+        """Whether w's step after the stretch is queued behind a hold that goes behind w
+        (w would stand at k waiting for a vehicle that waits for w to leave k)."""
+        if k >= len(w.route) - 1:
+            return False
+        for mine in (w.edge_holds[k + 1], w.node_holds[k + 1]):
+            assert mine is not None
+            for other in self.table.blocked[mine.resource]:
+                if other is mine:
+                    break
+                if other.vehicle in first and other.index >= first[other.vehicle]:
+                    return True
+        return False
+
+    def _waits_on_stretch(
+        self,
+        v: Vehicle,
+        j: int,
+        pushes: dict[tuple[int, int], float],
+        spans: list[tuple[Hold, float, float]],
+    ) -> bool:
+        """Whether `v`, pushed to leave its index j-1 later, would then stand there during
+        one of w's new holds on a conflicting resource."""
+        waiting = v.node_holds[j - 1]
+        leaves = pushes.get((v.idx, j - 1), v.depart[j - 1])
+        end = max(waiting.end, leaves + self.graphs[v.cls].travel[(v.route[j - 1], v.route[j])])
+        return any(
+            hold.resource in waiting.conflicts and waiting.key < e and end > s
+            for hold, s, e in spans
+        )
 
     def _fits_ahead(self, w: Vehicle, k: int, times: Schedule) -> bool:
         """Whether w's stretch at `times` overlaps no other vehicle's hold, and its first step
