@@ -129,7 +129,7 @@ class LiveVehicle:
         shown = parts.row["clock_skew"] if parts is not None and parts.row is not None else None
         if skew is None or shown is None:
             return skew is not shown
-        return abs(skew - shown) >= SHOWN_SKEW_STEP
+        return bool(abs(skew - shown) >= SHOWN_SKEW_STEP)
 
     def apply_connection(self, message: vda5050.Connection, *, received_at: datetime) -> bool:
         """Take a connection message; True if the vehicle (re)connected."""

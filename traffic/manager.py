@@ -350,7 +350,7 @@ class TrafficManager(Commit):
         if (passed, plan_id) != (v.passed, v.plan_id):  # it moved on: a fresh start
             del self._unchanged[v.idx]
             return self.replan_after
-        return self.replan_after * min(2**count, self.replan_backoff)
+        return self.replan_after * min(1 << count, self.replan_backoff)
 
     def _replan_waiting(self, v: Vehicle, now: float) -> list[Release]:
         """Re-plan a vehicle waiting at its decision point; count whether its route stayed."""
