@@ -23,9 +23,13 @@ _INBOUND: dict[str, Callable[[Any], Any]] = {
 
 @functools.lru_cache(maxsize=256)  # once per message: a handful of distinct pairs per fleet
 def wire_version(topic_major: str, known: str | None) -> str:
-    """The version to decode with: the vehicle's, unless its topic says another major."""
-    if known is not None and vda5050.major_version_of(known) == topic_major:
-        return known
+    """The version to decode with: the vehicle's, unless its topic says another major (or
+    the one known is malformed: stored before the decoder refused such headers)."""
+    try:
+        if known is not None and vda5050.major_version_of(known) == topic_major:
+            return known
+    except vda5050.VersionError:
+        pass
     return "3.0.0" if topic_major == "v3" else "2.0.0"
 
 

@@ -36,7 +36,7 @@ from vda5050.v2 import (
     State,
     Visualization,
 )
-from vda5050.versions import SUPPORTED_MAJORS, major_of
+from vda5050.versions import SUPPORTED_MAJORS, header_version_problem, major_of
 
 __all__ = ["MAX_PAYLOAD_BYTES", "AnyMessage", "Payload", "decode", "encode"]
 
@@ -249,11 +249,15 @@ def decode(
         data = _checked_bytes(topic_kind, payload, max_payload_bytes)
     if decoder is None:
         legacy: Message = _guarded(topic_kind, lambda: _decode_v1(topic_kind, data))
+        if problem := header_version_problem(legacy.version):
+            raise DecodeError(topic_kind, problem, "$.version")
         return legacy
     try:
         result: AnyMessage = decoder.decode(data)
     except Exception as exc:  # incl. RecursionError; see _decode_error
         raise _decode_error(topic_kind, exc) from None
+    if problem := header_version_problem(result.version):
+        raise DecodeError(topic_kind, problem, "$.version")  # kept as the vehicle's version
     return result
 
 

@@ -57,3 +57,17 @@ def major_version_of(version: str) -> str:
                 _MAJOR_LEVELS.clear()
             _MAJOR_LEVELS[version] = level
     return level
+
+
+def header_version_problem(version: str | None) -> str | None:
+    """What is wrong with a message header's `version`, or None: it must be
+    "[Major].[Minor].[Patch]" of a supported major, or empty. A receiver keeps it as the
+    vehicle's version and decodes the vehicle's next messages with it (a malformed one made
+    every later message of the vehicle fail; found by fuzzing, `bench.fuzz`)."""
+    if not version:
+        return None
+    try:
+        major = major_of(version)  # cached per distinct string: a dict lookup per message
+    except VersionError:
+        return f"malformed version {version[:40]!r}"
+    return None if major in SUPPORTED_MAJORS else f"unsupported version {version[:40]!r}"

@@ -180,3 +180,29 @@ def test_msgspec_itself_rejects_non_finite_numbers() -> None:
     for raw in (b"NaN", b"Infinity", b"-Infinity", b"1e400", b"-1e400"):
         with pytest.raises(msgspec.DecodeError):
             msgspec.json.decode(raw, type=float)
+
+
+@pytest.mark.parametrize(
+    ("version", "reason"),
+    [
+        ("ac2.0.1", "malformed version"),  # what the fuzzer sent (bench.fuzz)
+        ("2.x", "malformed version"),
+        ("9.0.0", "unsupported version"),
+    ],
+)
+@pytest.mark.parametrize("kind", [TopicKind.STATE, TopicKind.CONNECTION, TopicKind.FACTSHEET])
+def test_a_header_version_that_is_malformed_or_unsupported_is_refused(
+    kind: TopicKind, version: str, reason: str
+) -> None:
+    valid = next(m for v, k, m in ALL_SAMPLES if k == kind and v == "2.0.0")
+    wire = _wire(valid) | {"version": version}
+    with pytest.raises(DecodeError) as refused:
+        decode(kind, _bytes(wire))
+    assert refused.value.path == "$.version"
+    assert reason in refused.value.reason
+
+
+@pytest.mark.parametrize("version", ["2.1.0", "2.1", "1.1.0", ""])
+def test_a_well_formed_or_empty_header_version_is_kept(version: str) -> None:
+    state = decode(TopicKind.STATE, _bytes(_wire(make_state("2.0.0")) | {"version": version}))
+    assert state.version == version
