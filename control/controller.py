@@ -174,6 +174,15 @@ class Controller(PeriodicWork):
                 self.counters["handler_errors"] += 1
                 logger.exception("handler failed for %s", topic_text)
 
+    def clock_skew_of(self, topic_text: str) -> float | None:
+        """The clock skew of the vehicle a handled message's topic names (None if unknown):
+        right after a state, that state's age when applied."""
+        topic = self._topics.get(topic_text)
+        vehicle = (
+            self.fleet.vehicles.get((topic.manufacturer, topic.serial_number)) if topic else None
+        )
+        return vehicle.session.clock_skew if vehicle is not None else None
+
     def _parse_topic(self, topic_text: str) -> Topic:
         """Parse and remember a valid topic: a fleet has a few topics per vehicle, and parsing
         (five levels checked by regex) was a third of the cost of a state message."""

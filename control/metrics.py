@@ -36,6 +36,8 @@ SNAPSHOT_INTERVAL = 2.0  # seconds between snapshots in Redis
 LATENCY_BUCKETS = (0.0001, 0.00025, 0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 1.0)
 # Pauses and stalls: up to seconds (a full collection of a large heap, a long plan).
 STALL_BUCKETS = (0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5)
+# A state's age when applied: milliseconds on one host, up to seconds with a backlog.
+AGE_BUCKETS = (0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0, 30.0)
 WAKEUP_PERIOD = 0.02  # s the wake-up probe sleeps between two measurements
 
 
@@ -101,6 +103,9 @@ class ControlMetrics:
         self.by_topic: Counter[str] = Counter()
         self.handling = Histogram()
         self.state_to_order = Histogram()
+        # From a state's timestamp to control having applied it: the ingest lag where the
+        # vehicles' clocks agree with control's (plus their skew where they do not)
+        self.state_age = Histogram(AGE_BUCKETS)
         self.gc_pause = {"young": Histogram(STALL_BUCKETS), "full": Histogram(STALL_BUCKETS)}
         self.wakeup_delay = Histogram(STALL_BUCKETS)
         self._gc_started = 0.0
@@ -120,7 +125,8 @@ class ControlMetrics:
 
         # Bound once: this wrapper runs for every message (thousands a second).
         clock, thread_id = time.perf_counter, threading.get_ident
-        by_topic, handling = self.by_topic, self.handling
+        by_topic, handling, state_age = self.by_topic, self.handling, self.state_age
+        skew_of = self.controller.clock_skew_of
 
         def on_message(client: mqtt.Client, userdata: Any, message: mqtt.MQTTMessage) -> None:
             arrived = clock()
@@ -135,6 +141,10 @@ class ControlMetrics:
             finally:
                 self._current = None
                 handling.observe(clock() - arrived)
+            if kind == "state":
+                age = skew_of(topic)
+                if age is not None:
+                    state_age.observe(max(age, 0.0))
 
         def timed_publish(topic: str, payload: bytes, qos: int) -> None:
             publish(topic, payload, qos)
@@ -206,6 +216,7 @@ class ControlMetrics:
             "messages_by_topic": dict(self.by_topic),
             "handling_seconds": self.handling.as_dict(),
             "state_to_order_seconds": self.state_to_order.as_dict(),
+            "state_age_seconds": self.state_age.as_dict(),
             "gc_young_pause_seconds": self.gc_pause["young"].as_dict(),
             "gc_full_pause_seconds": self.gc_pause["full"].as_dict(),
             "wakeup_delay_seconds": self.wakeup_delay.as_dict(),

@@ -157,6 +157,12 @@ class FleetCollector:
                     "state_to_order_seconds",
                 ),
                 (
+                    "fleet_control_state_age_seconds",
+                    "A state message's age when control applied it (vehicle timestamp to "
+                    "applied): the ingest lag, plus the vehicle's clock skew if any.",
+                    "state_age_seconds",
+                ),
+                (
                     "fleet_control_gc_young_pause_seconds",
                     "Garbage collections of the young generations (0, 1) in control.",
                     "gc_young_pause_seconds",

@@ -7,12 +7,15 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import IO, Any
 
+import paho.mqtt.client as mqtt
 import psutil
 import psycopg
+from paho.mqtt.enums import CallbackAPIVersion
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -98,6 +101,30 @@ def create_database(admin_url: str, name: str) -> None:
     with psycopg.connect(admin_url, autocommit=True) as connection:
         connection.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
         connection.execute(f'CREATE DATABASE "{name}"')
+
+
+def broker_dropped(port: int, timeout: float = 5.0) -> int | None:
+    """Mosquitto's count of messages it dropped (queue limits) since it started, from its
+    retained `$SYS/broker/publish/messages/dropped` (None if it did not say in time)."""
+    got: dict[str, int] = {}
+    arrived = threading.Event()
+
+    def on_message(_c: mqtt.Client, _u: Any, message: mqtt.MQTTMessage) -> None:
+        with contextlib.suppress(ValueError):
+            got["dropped"] = int(message.payload)
+            arrived.set()
+
+    client = mqtt.Client(CallbackAPIVersion.VERSION2, client_id=f"loadbench-sys-{os.getpid()}")
+    client.on_message = on_message
+    client.connect("127.0.0.1", port, 30)
+    client.subscribe("$SYS/broker/publish/messages/dropped", 0)
+    client.loop_start()
+    try:
+        arrived.wait(timeout)
+    finally:
+        client.disconnect()
+        client.loop_stop()
+    return got.get("dropped")
 
 
 def db_stats(url: str, name: str) -> dict[str, int]:

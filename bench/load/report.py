@@ -38,6 +38,10 @@ def _delta_histogram_p(
     return None
 
 
+def _difference(before: int | None, after: int | None) -> int | None:
+    return None if before is None or after is None else after - before
+
+
 def _count_delta(before: dict[str, Any], after: dict[str, Any], key: str) -> int | None:
     """Observations of histogram `key` in the window (None: not in the snapshots)."""
     if key not in before or key not in after:
@@ -94,6 +98,17 @@ def report(
             "state_to_order_p99_ms_bucket": _delta_histogram_p(
                 c0["state_to_order_seconds"], c1["state_to_order_seconds"], 0.99
             ),
+            # RELIABILITY.md §5 "Load": ingest lag (a state's age when control applied it;
+            # vehicles and control share this machine's clock) and header-id gaps (messages
+            # lost between vehicle and control)
+            **{
+                f"ingest_lag_{label}_ms_bucket": _delta_histogram_p(
+                    c0.get("state_age_seconds", {}), c1.get("state_age_seconds", {}), q
+                )
+                for label, q in (("p50", 0.5), ("p99", 0.99), ("max", 1.0))
+            },
+            "header_gaps": c1.get("vehicle_counters", {}).get("gaps", 0)
+            - c0.get("vehicle_counters", {}).get("gaps", 0),
             "vehicles_executing": c1.get("vehicles_executing"),
             # What stalls the paho thread: the GIL held elsewhere (or no free core), collections.
             **{
@@ -143,6 +158,8 @@ def report(
         "api": probes["api"],
         "browser": probes["ws"],
         "db_rows_per_s": {k: round(v / wall, 1) for k, v in db.items()},
+        # RELIABILITY.md §5 "Load": messages Mosquitto dropped in the window ($SYS)
+        "broker_dropped": _difference(before.get("broker_dropped"), after.get("broker_dropped")),
         "offered_per_s": {  # what the vehicles would send if the pumps got the CPU they need
             "state": round(args.vehicles / _on_ticks(args.state_interval), 1),
             "visualization": round(args.vehicles * args.visualization_hz, 1),

@@ -33,6 +33,7 @@ from bench import results
 from bench.load.processes import (
     ROOT,
     Child,
+    broker_dropped,
     create_database,
     db_stats,
     free_ports,
@@ -52,6 +53,8 @@ max_queued_messages {max_queued}
 max_inflight_messages 20
 set_tcp_nodelay true
 persistence false
+# $SYS/broker/publish/messages/dropped every second: the run reports the drops in its window
+sys_interval 1
 log_dest stderr
 log_type error
 log_type warning
@@ -254,7 +257,7 @@ def measure(
     ]
     rds = redis.Redis.from_url(args.redis)
     time.sleep(max(0.0, start - time.time()))
-    before = sample(children, rds, db_url, args.database)
+    before = sample(children, rds, db_url, args.database, port)
     if args.py_spy:  # where control's CPU goes, as collapsed stacks (flamegraph input)
         control = next(c for c in children if c.name == "control")
         argv = ["py-spy", "record", "-p", str(control.popen.pid), "-d", str(int(args.seconds))]
@@ -268,7 +271,7 @@ def measure(
             )
         )
     time.sleep(args.seconds)
-    after = sample(children, rds, db_url, args.database)
+    after = sample(children, rds, db_url, args.database, port)
     for probe in probes:
         probe.popen.wait(timeout=args.seconds + 120)  # all end on their own
         probe.log.close()
@@ -283,9 +286,12 @@ def measure(
     return report(args, before, after, probe_results, memory, registered_s, info)
 
 
-def sample(children: list[Child], rds: redis.Redis, db_url: str, database: str) -> dict[str, Any]:
+def sample(
+    children: list[Child], rds: redis.Redis, db_url: str, database: str, port: int
+) -> dict[str, Any]:
     raw = rds.get(SNAPSHOT_KEY)
     return {
+        "broker_dropped": broker_dropped(port),
         "wall": time.monotonic(),
         "cpu": {child.name: child.cpu_seconds() for child in children},
         "cpu_kernel": {child.name: child.cpu_seconds(kernel_only=True) for child in children},

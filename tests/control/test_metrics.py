@@ -5,9 +5,11 @@ import json
 import logging
 import threading
 import time
+from datetime import UTC, datetime, timedelta
 from types import SimpleNamespace
 from typing import Any
 
+import msgspec
 import pytest
 import redis
 from django.conf import settings
@@ -267,3 +269,20 @@ def test_json_log_lines_carry_level_logger_message_extras_and_exceptions() -> No
     assert line["vehicle"] == "AGV-1"
     assert "ValueError: boom" in line["exception"]
     assert line["time"].endswith("+00:00")
+
+
+def test_a_state_s_age_when_applied_is_the_ingest_lag() -> None:
+    _, metrics, client = _instrumented([])
+    stamped = datetime.now(UTC) - timedelta(seconds=0.3)
+    message = msgspec.json.decode(state(last_node="a"))
+    message["timestamp"] = stamped.isoformat().replace("+00:00", "Z")
+    _deliver(client, topic(), msgspec.json.encode(message))
+    _deliver(client, topic(kind="visualization"), b"{not json")  # no state: no age
+
+    age = metrics.snapshot()["state_age_seconds"]
+    by_bound = dict(zip([*age["bounds"], "inf"], age["counts"], strict=True))
+    assert sum(age["counts"]) == 1
+    assert by_bound[0.5] == 1  # 0.3 s and the time to handle it
+    snapshot = metrics.snapshot()
+    rendered = _samples(render(FleetCollector(snapshot, [], {}, {}, now=snapshot["time"])))
+    assert rendered[("fleet_control_state_age_seconds_count", ())] == 1
