@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 NATIVE := .native-build/stamp
 
-.PHONY: bench-faults demo test lint format venv native browser clean bench-ingest bench-dispatch bench-routing bench-energy bench-reports bench-traffic bench-traffic-control bench-load
+.PHONY: bench-faults demo test lint format venv native browser clean bench-ingest bench-dispatch bench-routing bench-energy bench-reports bench-traffic bench-traffic-control bench-load bench-fuzz
 
 $(STAMP): requirements.txt requirements-dev.txt
 	@command -v $(PYTHON) >/dev/null || { echo "Python 3.11 is required ($(PYTHON) not found)"; exit 1; }
@@ -66,6 +66,9 @@ bench-traffic-control: $(STAMP) $(NATIVE)  ## release decisions inside control, 
 
 bench-load: $(STAMP) $(NATIVE)  ## 1,000 vehicles against the real processes, 120 s (bench/results/load.json, docs/LOAD.md)
 	nice -n 5 $(PY) -m bench.load $(BENCH_ARGS)
+
+bench-fuzz: $(STAMP)  ## control's inbound MQTT path under atheris, 1 h (bench/results/fuzz.json; BENCH_ARGS="--seconds 60")
+	DJANGO_SETTINGS_MODULE=fleet.settings $(PY) -m bench.fuzz $(BENCH_ARGS)
 
 bench-faults: $(STAMP) $(NATIVE)  ## the fault suite, each row on its own services (bench/results/faults_*.json; BENCH_ARGS="broker --full")
 	$(PY) -m bench.faults $(BENCH_ARGS)

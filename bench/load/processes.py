@@ -103,7 +103,7 @@ def create_database(admin_url: str, name: str) -> None:
         connection.execute(f'CREATE DATABASE "{name}"')
 
 
-def broker_dropped(port: int, timeout: float = 5.0) -> int | None:
+def broker_dropped(port: int, timeout: float = 15.0) -> int | None:
     """Mosquitto's count of messages it dropped (queue limits) since it started, from its
     retained `$SYS/broker/publish/messages/dropped` (None if it did not say in time)."""
     got: dict[str, int] = {}
