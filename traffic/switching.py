@@ -1,12 +1,15 @@
-"""Switching two vehicles' order on a shared stretch (opt-in): a switchable ADG.
+"""Switching the order of vehicles on a shared stretch (opt-in): a switchable ADG.
 
 The plain ADG keeps every resource's queue in the order the plans were made. When the vehicle
 first in a queue is late (standing in a delay, waiting itself, or still far away), a vehicle
 queued behind it that stands ready at its decision point waits although the resource is free.
 With `TrafficManager(switching=True)` such a waiting vehicle W may go ahead of the late one L
 over a short **stretch** of its route (in the spirit of Berndt et al.'s switchable action
-dependency graph): W's unreleased steps b+1..k (b its decision point) are re-timed to the
-earliest W can drive them, queued ahead of L's holds there, and L is re-timed after them.
+dependency graph): W's unreleased steps b+1..k (b its decision point; k the first node L is not
+queued to pass before W) are re-timed to the earliest W can drive them and queued ahead of L's
+holds there, and L is re-timed after them. So is any other vehicle whose unreleased holds W's
+new times overlap; a vehicle coming the same way follows W, one coming the other way waits
+before the stretch.
 
 Why this keeps the release guarantee. Collision-freedom does not depend on the order: a hold
 is entered only when no other vehicle's hold is queued ahead of it in its list, and a released
@@ -17,21 +20,24 @@ follow each other in time. Then every wait points forward in plan time and the w
 is acyclic whatever the delays (`traffic.reservations`). A switch keeps that invariant in two
 steps, each of which keeps it on its own:
 
-1. **L is re-timed later** (if W's stretch does not fit before L's holds already): one push
-   "L departs from index j-1 no earlier than T" through `propagate`, the re-timing every tick
-   does; it changes no order, so the schedule stays consistent (and the push terminates).
+1. **The vehicles that go behind are re-timed later**: pushes "V departs from index i no
+   earlier than t" (t: the end of W's new hold that V's hold must follow) through
+   `propagate`, the re-timing every tick does. Pushes change no order, so the schedule stays
+   consistent, and they terminate.
 2. **W's stretch is re-timed earlier** to times that, with every other hold as it now is,
    overlap no other vehicle's hold (`ReservationTable.admits`, asked for each hold of the
    stretch), and that W's unchanged rest still follows (it arrives at k before it planned to
    leave k). The stretch's holds are then queued again by their new start, so each list is in
-   time order.
+   time order again.
 
-If step 2's check fails after step 1 (a rare side effect of the push on a third vehicle), the
-switch is dropped: L's later times are a push like any other. Only unreleased holds change
-places (a base is never revoked), and only L's: every other vehicle's hold that W's new times
-would overlap makes the switch fail. A switch is made only when W's first step can then be
-released at once, so each switch moves a vehicle (no two vehicles switch back and forth
-without progress), and a vehicle tries at most once per `SWITCH_EVERY` seconds.
+Only unreleased holds change places (a base is never revoked); a released hold in the way
+rules a switch out. Two pre-checks keep step 2 from failing after step 1 (a wasted push):
+a vehicle that goes behind must not wait on a node the stretch needs, and W must not stand
+at k waiting for one of them (each would wait for the other); if step 2's check still fails
+(a side effect of the pushes on a third vehicle), the switch is dropped and the pushes stay,
+like any re-timing. A switch is made only when W's first step can then be released at once,
+so each switch moves a vehicle (no two vehicles switch back and forth without progress), and
+a vehicle tries at most once per `SWITCH_EVERY` seconds.
 """
 
 from __future__ import annotations

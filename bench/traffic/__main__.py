@@ -41,16 +41,17 @@ def main() -> None:
     )
     parser.add_argument(
         "--switch-push",
-        default="off",
-        help="SECONDS: a vehicle waiting behind a late one may go ahead of it, pushing its plan "
-        "back at most this long (traffic.switching); 'off' (default): no switching",
+        default="",
+        help="SECONDS: a vehicle waiting behind a late one may go ahead of it, pushing the late "
+        "one's plan back at most this long (traffic.switching), or 'off'; default: "
+        f"{scenarios.SWITCH_PUSH:g} for S3 and lifelong S2, off for S1",
     )
     args = parser.parse_args()
-    switch_push = None if args.switch_push == "off" else float(args.switch_push)
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
         figures: dict[str, Any]
         lifelong = args.lifelong == "on" if args.lifelong else name == "S2"
+        switch_push = _switch_push(args.switch_push, name, lifelong)
         if name == "S2":
             figures = scenarios.s2(
                 quick=args.quick,
@@ -87,6 +88,16 @@ def main() -> None:
             suffix = f"_{args.tag}" if args.tag else ""
             path = write(f"traffic_{name.lower()}{suffix}", figures)
             print(f"  -> {path}")
+
+
+def _switch_push(given: str, scenario: str, lifelong: bool) -> float | None:
+    """The switching push limit of a run (None: no switching)."""
+    if given == "off":
+        return None
+    if given:
+        return float(given)
+    on = scenario == "S3" or (scenario == "S2" and lifelong)
+    return scenarios.SWITCH_PUSH if on else None
 
 
 if __name__ == "__main__":
