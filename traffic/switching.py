@@ -62,13 +62,13 @@ class Switching(FleetQueries):
 
     graphs: list[ClassGraph]
     switching: bool
-    # s: the most a switch may push the late vehicle's plan back (0: only switches that fit
-    # before it as planned)
+    # s: the most a switch may push back the plan of a vehicle that goes behind (0: only
+    # switches that fit before the others' plans as they are)
     switch_push: float
     switch_steps: int  # the longest stretch a switch moves (steps)
     switches: int  # switches made
-    switch_pushes: int  # of which pushed the late vehicle
-    switches_dropped: int  # pushes made whose switch then failed its check
+    switch_pushes: int  # switches that pushed vehicles going behind (dropped ones included)
+    switches_dropped: int  # switches whose final check failed after their pushes
 
     def _switch(self, w: Vehicle, blocker: Hold, now: float) -> bool:
         """Let `w`, standing at its decision point and stopped by `blocker` on its next step,
