@@ -349,9 +349,12 @@ class TrafficLink(OrderWindows):
             if queued.static is None and self.tracked.get(queued_name) is queued:
                 with self.searches.searches_let_go():
                     self.managers[queued.map_id].replan(queued_name, now)
-        for manager in list(self.managers.values()):
-            with self.searches.searches_let_go():  # its re-plans: state messages go on meanwhile
-                manager.tick(now)
+        for map_id, manager in list(self.managers.items()):
+            try:
+                with self.searches.searches_let_go():  # re-plans: state messages go on meanwhile
+                    manager.tick(now)
+            except Exception as exc:  # the order sync after it must go on (starts, resends)
+                self._count(f"traffic tick failed on map {map_id}: {exc!r}")
 
     # -- for the live page ----------------------------------------------------------------------
 

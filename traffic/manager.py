@@ -146,11 +146,12 @@ class TrafficManager(Commit):
         self._length = {(e.start, e.end): e.length for e in layout.edges}
         # Set by a caller that plans under a lock of its own (control): the search loop then
         # runs inside `unlocked()`, which lets the lock go, so that other threads' state
-        # messages are handled meanwhile; its path is checked against the table once the lock
-        # is back and searched again, held, if something it relied on changed
-        # (`searches_repeated` counts those).
+        # messages are handled meanwhile; its path is checked once the lock is back: dropped
+        # if the vehicle itself changed (`searches_dropped`), searched again, held, if the
+        # table changed where the path goes (`searches_repeated`).
         self.unlocked: Callable[[], AbstractContextManager[object]] | None = None
         self.searches_repeated = 0
+        self.searches_dropped = 0  # unlocked searches whose vehicle changed meanwhile
 
     # -- fleet ------------------------------------------------------------------------------
 
@@ -258,30 +259,41 @@ class TrafficManager(Commit):
         if v.static:
             return None
         refuge = self.goal_refuge if refuge is None else refuge
+        if self.unlocked is None:
+            path = self._search(self._searcher(v, goals, now, partial, refuge), None)
+        else:
+            before, since = planning_state(v), self.table.clock
+            path = self._search(self._searcher(v, goals, now, partial, refuge), self.unlocked)
+            if path is not None and planning_state(v) != before:
+                # The vehicle itself changed under the search (its base was extended, it was
+                # blocked or planned by another thread): the path starts where its route no
+                # longer ends. Dropped; the caller plans again later. (Searching again from
+                # the old start once made a route that went from a node to itself.)
+                self.searches_dropped += 1
+                return None
+            if path is not None and not self._fits(v, path, since):
+                # the table changed under the search: again, held this time, from the
+                # table as it is now (the deadline at the start may have moved)
+                self.searches_repeated += 1
+                path = self._search(self._searcher(v, goals, now, partial, refuge), None)
+        if path is None or (not to_base and path.stops[:1] == [0]):
+            return None
+        releases = self._commit(v, path, goals, now, hold=refuge)
+        return v.snapshot(self.layout, releases)
+
+    def _searcher(
+        self, v: Vehicle, goals: list[tuple[int, float]], now: float, partial: bool, refuge: bool
+    ) -> Callable[..., Path | None]:
+        """The search of `v`'s route from its decision point as it is now (`_search` runs it)."""
         graph = self.graphs[v.cls]
         b = v.base
         start = v.route[b]
         t0 = max(now, v.ready_at) if v.passed == b else now + self._remaining(v, graph)
         deadline = self.table.first_other_start(start, v.idx)
         args = (graph, self.table, v.idx, start, v.headings[b], t0, deadline, goals)
-        run = functools.partial(
+        return functools.partial(
             search, *args, partial=partial, refuge=refuge, refuge_cost=self.refuge_cost
         )
-        if self.unlocked is None:
-            path = self._search(run, None)
-        else:
-            before, since = planning_state(v), self.table.clock
-            path = self._search(run, self.unlocked)
-            if path is not None and not (
-                planning_state(v) == before and self._fits(v, path, since)
-            ):
-                # the table or the vehicle changed under the search: again, held this time
-                self.searches_repeated += 1
-                path = self._search(run, None)
-        if path is None or (not to_base and path.stops[:1] == [0]):
-            return None
-        releases = self._commit(v, path, goals, now, hold=refuge)
-        return v.snapshot(self.layout, releases)
 
     def _search(
         self,

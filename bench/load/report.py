@@ -8,7 +8,10 @@ from typing import Any
 
 PUMP_TICK_HZ = 10.0  # bench.load.run starts the pumps with --tick-hz 10
 # control counters reported as their growth in the window
-TRAFFIC_COUNTERS = ("traffic_searches_repeated", "traffic_replans", "traffic_replans_unchanged")
+TRAFFIC_COUNTERS = (
+    *("traffic_searches_repeated", "traffic_searches_dropped"),
+    *("traffic_replans", "traffic_replans_unchanged"),
+)
 
 
 def _on_ticks(interval: float, tick_hz: float = PUMP_TICK_HZ) -> float:

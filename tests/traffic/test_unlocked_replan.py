@@ -1,0 +1,65 @@
+"""A re-plan whose vehicle changed while its search let the lock go is dropped.
+
+Found in a 30-minute load run (docs/LOAD.md, ninth round): a vehicle waiting at its decision
+point was re-planned by the tick; during the unlocked search the vehicle ahead moved on, which
+released the waiting vehicle's next step (its base grew). The manager then searched again,
+held, but from the old start, and committed that path after the new base: the route went from
+a node to itself, and every later tick failed on it.
+"""
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import pytest
+
+from tests.traffic.helpers import cells, manager
+from traffic import speedups
+from traffic.layout import Layout
+from traffic.plans import ReleasePolicy
+
+pytestmark = pytest.mark.skipif(
+    speedups.COMPILED is None, reason="only the compiled search runs unlocked"
+)
+
+LANE = Layout.grid(cells(["......"]))
+ONE_STEP = ReleasePolicy(max_steps=1, max_distance=1.0)
+
+
+def test_a_re_plan_whose_vehicle_was_released_meanwhile_is_dropped() -> None:
+    m = manager(LANE, {"a": "0,0", "c": "0,1"}, policy=ONE_STEP)
+    m.plan("c", "0,5", 0.0)
+    m.plan("a", "0,4", 0.0)
+    assert m.waiting_for("a") == ["c"]
+    assert m.release_of("a").base_end == 0
+
+    @contextmanager
+    def meanwhile() -> Iterator[None]:
+        yield  # a's path is found here; then c moves on, which releases a's next step
+        m.unlocked = None
+        m.on_progress("c", 1, 1.0)
+        m.unlocked = meanwhile
+
+    m.unlocked = meanwhile
+    assert m.replan("a", 1.0) is None  # dropped: a keeps the plan it drives
+
+    route = m.plan_of("a").nodes
+    assert all(here != there for here, there in zip(route, route[1:], strict=False)), route
+    assert m.release_of("a").base_end == 1
+    assert m.searches_dropped == 1
+    assert m.searches_repeated == 0
+    m.unlocked = None
+    m.tick(2.0)  # the route is whole: re-timing walks it without a missing move
+
+
+def test_a_failing_tick_does_not_stop_the_order_sync(monkeypatch: pytest.MonkeyPatch) -> None:
+    from tests.traffic.test_link import Rig
+
+    rig = Rig(("A", "W"))
+    manager = rig.link.managers["m"]
+
+    def broken(now: float, **options: object) -> list[object]:
+        raise KeyError((119, 119))
+
+    monkeypatch.setattr(manager, "tick", broken)
+    rig.link.tick(10.0)  # logged and counted, not raised
+    assert rig.link.problems == {"traffic tick failed on map m: KeyError((119, 119))": 1}
