@@ -203,7 +203,7 @@ class ControlMetrics:
             if controller.traffic is not None:  # unlocked route searches done again, held
                 managers = controller.traffic.managers.values()
                 counters["traffic_searches_repeated"] = sum(m.searches_repeated for m in managers)
-                counters["traffic_searches_dropped"] = sum(m.searches_dropped for m in managers)
+                counters["traffic_searches_moved"] = sum(m.searches_moved for m in managers)
                 # the tick's re-plans of waiting vehicles, and those that kept the route
                 counters["traffic_replans"] = sum(m.replans for m in managers)
                 counters["traffic_replans_unchanged"] = sum(m.replans_unchanged for m in managers)

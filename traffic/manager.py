@@ -146,12 +146,13 @@ class TrafficManager(Commit):
         self._length = {(e.start, e.end): e.length for e in layout.edges}
         # Set by a caller that plans under a lock of its own (control): the search loop then
         # runs inside `unlocked()`, which lets the lock go, so that other threads' state
-        # messages are handled meanwhile; its path is checked once the lock is back: dropped
-        # if the vehicle itself changed (`searches_dropped`), searched again, held, if the
-        # table changed where the path goes (`searches_repeated`).
+        # messages are handled meanwhile; its path is checked once the lock is back and
+        # searched again, held, from the current state if the vehicle itself changed
+        # (`searches_moved`) or the table changed where the path goes (`searches_repeated`
+        # counts both).
         self.unlocked: Callable[[], AbstractContextManager[object]] | None = None
         self.searches_repeated = 0
-        self.searches_dropped = 0  # unlocked searches whose vehicle changed meanwhile
+        self.searches_moved = 0  # of those, because the vehicle itself changed meanwhile
 
     # -- fleet ------------------------------------------------------------------------------
 
@@ -264,17 +265,16 @@ class TrafficManager(Commit):
         else:
             before, since = planning_state(v), self.table.clock
             path = self._search(self._searcher(v, goals, now, partial, refuge), self.unlocked)
-            if path is not None and planning_state(v) != before:
-                # The vehicle itself changed under the search (its base was extended, it was
-                # blocked or planned by another thread): the path starts where its route no
-                # longer ends. Dropped; the caller plans again later. (Searching again from
-                # the old start once made a route that went from a node to itself.)
-                self.searches_dropped += 1
-                return None
-            if path is not None and not self._fits(v, path, since):
-                # the table changed under the search: again, held this time, from the
-                # table as it is now (the deadline at the start may have moved)
+            moved = path is not None and planning_state(v) != before
+            if moved or (path is not None and not self._fits(v, path, since)):
+                # The vehicle (its base was extended, it was blocked or planned by another
+                # thread) or the table changed under the search: again, held this time, from
+                # the vehicle and the table as they are now. (Searching again from the old
+                # start once made a route that went from a node to itself.)
                 self.searches_repeated += 1
+                self.searches_moved += moved
+                if v.static:
+                    return None
                 path = self._search(self._searcher(v, goals, now, partial, refuge), None)
         if path is None or (not to_base and path.stops[:1] == [0]):
             return None
