@@ -131,6 +131,7 @@ class TrafficLink(OrderWindows):
                 self._count(f"cannot place {name(vehicle)}: {exc}")
                 return None
             tracked = self.tracked[name(vehicle)] = Tracked(vehicle, candidate)
+            tracked.note(now, f"registered at {node}")
             return tracked
         return None
 
@@ -142,6 +143,7 @@ class TrafficLink(OrderWindows):
             return
         manager.block(name(tracked.vehicle), now)
         manager.restore(name(tracked.vehicle), node, now)
+        tracked.note(now, f"reset at {node} (order {tracked.order_id})")
         tracked.order_id = None
 
     # -- hot path -----------------------------------------------------------------------------
@@ -185,7 +187,11 @@ class TrafficLink(OrderWindows):
         try:
             releases = manager.on_progress(name(vehicle), passed, now)
         except ValueError as exc:  # beyond its base: it drove what we never released
-            self._count(str(exc))
+            self._count(
+                f"{exc} (order {state.order_id}, sequence id {state.last_node_sequence_id}, "
+                f"offset {tracked.offset}, plan {v.plan_id} of {len(v.route)} nodes; "
+                f"{tracked.history(now)})"
+            )
             return []
         me = name(vehicle)
         return [self.tracked[r.vehicle_id].vehicle for r in releases if r.vehicle_id != me]
@@ -208,6 +214,7 @@ class TrafficLink(OrderWindows):
             driving = state is not None and bool(state.node_states) and state.order_id
             tracked.lost = tracked.order_id or (state.order_id if driving else None)
             tracked.static, tracked.order_id = reason, None
+            tracked.note(now, f"blocked ({reason}), lost {tracked.lost}")
             logger.info("traffic: %s is a static obstacle (%s)", me, reason)
             return [self.tracked[n].vehicle for n in replanned if n in self.tracked]
         if reason is None and tracked.static is not None:
@@ -219,6 +226,7 @@ class TrafficLink(OrderWindows):
                 self._count(f"cannot restore {me}: {exc}")
                 return []
             tracked.static, tracked.order_id = None, None
+            tracked.note(now, f"restored at {state.last_node_id}")
             logger.info("traffic: %s is back under traffic control", me)
         return []
 
@@ -248,6 +256,10 @@ class TrafficLink(OrderWindows):
                 self._count(f"no plan to re-adopt {state.order_id}: {exc}")
                 return []
         tracked.order_id, tracked.lost, tracked.offset = state.order_id, None, decision
+        v = manager.vehicle(me)
+        tracked.note(
+            now, f"re-adopted {state.order_id} at {decision}: plan {v.plan_id} base {v.base}"
+        )
         logger.info("traffic: %s re-adopted %s at route index %d", me, state.order_id, decision)
         return []
 
@@ -296,6 +308,7 @@ class TrafficLink(OrderWindows):
         if self.parking is not None:
             self.parking.planned(name(vehicle))
         tracked.order_id, tracked.lost, tracked.offset = order_id, None, 0
+        tracked.note(now, f"started {order_id}: plan {plan.plan_id} base {plan.base_end}")
         return plan
 
     def _clear_way(
@@ -320,6 +333,7 @@ class TrafficLink(OrderWindows):
             tracked.lost = None
         if tracked is None or tracked.order_id is None:
             return
+        tracked.note(now, f"ended {tracked.order_id}")
         state = vehicle.state
         manager = self.managers[tracked.map_id]
         v = manager.vehicle(name(vehicle))

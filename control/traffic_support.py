@@ -4,6 +4,7 @@ Used by `control.traffic_link`; no state here.
 """
 
 import math
+from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
@@ -148,6 +149,17 @@ class Tracked:
     # planned again from there, route index `offset` of the order being index 0 of the plan.
     lost: str | None = None
     offset: int = 0
+    # The last few things the link did with this vehicle (monotonic time, what), logged with
+    # a problem such as progress beyond the base, so that the log says how it came about.
+    trail: deque[tuple[float, str]] = field(default_factory=lambda: deque(maxlen=12))
+
+    def note(self, now: float, what: str) -> None:
+        """Remember one event for the trail."""
+        self.trail.append((now, what))
+
+    def history(self, now: float) -> str:
+        """The trail as text, newest last, times in seconds before `now`."""
+        return "; ".join(f"-{now - t:.1f}s {what}" for t, what in self.trail)
 
 
 def name(vehicle: LiveVehicle) -> str:
