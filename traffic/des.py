@@ -7,7 +7,8 @@ manager's bookkeeping the executor tracks what each vehicle physically occupies 
 while moving the segment and the next node) and counts a collision whenever a vehicle starts a
 move into resources that conflict with another vehicle's. It also counts wait-for cycles and
 stalls (a vehicle with work left that has not moved for `stall_after` seconds; see
-`traffic.des_watch`). What a run is given and measures is in `traffic.des_records`.
+`traffic.des_watch`). What a run is given and measures is in `traffic.des_records`, the
+free-flow time that ratios are measured against in `traffic.free_flow`.
 """
 
 from __future__ import annotations
@@ -20,10 +21,9 @@ from typing import cast
 
 from traffic.des_records import ReassigningTasks, SimConfig, SimStats, TaskRecord, Tasks
 from traffic.des_watch import StallWatch
+from traffic.free_flow import free_flow_time
 from traffic.manager import NoPlanError, TrafficManager
 from traffic.plans import Goal, Plan, Release
-from traffic.reservations import INF, ReservationTable
-from traffic.sipp import ClassGraph, search
 
 MOVE, RETRY, CHECK = 0, 1, 2
 
@@ -384,33 +384,6 @@ class Simulation:
             occupant.setdefault(r, set()).add(car.idx)
         car.occupied = resources
 
-
-def free_flow_time(
-    manager: TrafficManager, vehicle_class: int, start: int, heading: int, goals: Sequence[Goal]
-) -> float:
-    """Seconds a vehicle alone on the layout needs for `goals` (turns and dwells included)."""
-    graph: ClassGraph = manager.graphs[vehicle_class]
-    targets = [(manager.layout.node(g.node), g.dwell) for g in goals]
-    path = search(graph, _EMPTY.get(manager), -1, start, heading, 0.0, INF, targets)
-    if path is None:
-        return INF
-    return path.arrive[-1] + targets[-1][1]
-
-
-class _Empty:
-    """Empty reservation tables, one per layout size."""
-
-    def __init__(self) -> None:
-        self._tables: dict[int, ReservationTable] = {}
-
-    def get(self, manager: TrafficManager) -> ReservationTable:
-        count = manager.layout.resource_count
-        if count not in self._tables:
-            self._tables[count] = ReservationTable(count)
-        return self._tables[count]
-
-
-_EMPTY = _Empty()
 
 __all__ = [
     "SimConfig",
