@@ -207,6 +207,11 @@ class ControlMetrics:
                 # the tick's re-plans of waiting vehicles, and those that kept the route
                 counters["traffic_replans"] = sum(m.replans for m in managers)
                 counters["traffic_replans_unchanged"] = sum(m.replans_unchanged for m in managers)
+                # progress beyond the base, vehicles that cannot be placed, ... (logged too)
+                counters["traffic_problems"] = sum(controller.traffic.problems.values())
+                safety = controller.traffic.safety(time.monotonic())
+            else:
+                safety = {}
         return {
             "time": time.time(),
             "started": self.started,
@@ -224,6 +229,8 @@ class ControlMetrics:
             "vehicles": len(vehicles),
             "vehicles_by_link": dict(links),
             "vehicles_executing": executing,
+            # the traffic safety net: wait-for cycles and stalled vehicles (both must stay 0)
+            "traffic_safety": safety,
             "cpu_seconds": time.process_time(),
         }
 

@@ -192,6 +192,15 @@ class FleetCollector:
             "Vehicles control is driving an order with.",
             snapshot.get("vehicles_executing", 0),
         )
+        safety = GaugeMetricFamily(
+            "fleet_control_traffic_safety",
+            "Traffic's safety net now: wait-for cycles (deadlocks) and stalled vehicles (no "
+            "progress along a whole wait-for chain for 60 s). Both must stay 0: alert on any.",
+            labels=["check"],
+        )
+        for check, count in sorted(snapshot.get("traffic_safety", {}).items()):
+            safety.add_metric([check], count)
+        yield safety
         yield CounterMetricFamily(
             "fleet_control_cpu_seconds", "CPU time of the control process.", snapshot["cpu_seconds"]
         )

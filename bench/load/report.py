@@ -10,7 +10,7 @@ PUMP_TICK_HZ = 10.0  # bench.load.run starts the pumps with --tick-hz 10
 # control counters reported as their growth in the window
 TRAFFIC_COUNTERS = (
     *("traffic_searches_repeated", "traffic_searches_moved"),
-    *("traffic_replans", "traffic_replans_unchanged"),
+    *("traffic_replans", "traffic_replans_unchanged", "traffic_problems"),
 )
 
 
@@ -113,6 +113,8 @@ def report(
             "header_gaps": c1.get("vehicle_counters", {}).get("gaps", 0)
             - c0.get("vehicle_counters", {}).get("gaps", 0),
             "vehicles_executing": c1.get("vehicles_executing"),
+            # at the end of the window: wait-for cycles and stalled vehicles (both must be 0)
+            "traffic_safety": c1.get("traffic_safety", {}),
             # What stalls the paho thread: the GIL held elsewhere (or no free core), collections.
             **{
                 f"{name}_{label}_ms_bucket": _delta_histogram_p(

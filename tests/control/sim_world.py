@@ -87,7 +87,9 @@ class SimWorld:
 
     def deliver(self, topic: str, payload: bytes, qos: int) -> None:
         serial, kind = topic.split("/")[-2:]
-        vehicle = self.vehicles[serial]
+        vehicle = self.vehicles.get(serial)
+        if vehicle is None:
+            return  # a vehicle this world does not simulate: nobody receives it
         if kind == "order":
             vehicle.on_order(wire.decode_inbound(TopicKind.ORDER, payload, "2.0.0"))  # type: ignore[arg-type]
         elif kind == "instantActions":

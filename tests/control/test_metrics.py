@@ -146,6 +146,7 @@ def test_rendering_has_counters_histograms_and_database_gauges() -> None:
         "gc_full_pause_seconds": Histogram((0.1,)).as_dict(),
         "vehicles_by_link": {"ONLINE": 3},
         "vehicles_executing": 1,
+        "traffic_safety": {"cycles": 0, "stalled": 2},
         "cpu_seconds": 12.5,
     }
     collector = FleetCollector(
@@ -172,6 +173,8 @@ def test_rendering_has_counters_histograms_and_database_gauges() -> None:
     assert samples[("fleet_control_gc_full_pause_seconds_count", ())] == 0
     assert ("fleet_control_gc_young_pause_seconds_count", ()) not in samples  # not in snapshot
     assert samples[("fleet_control_vehicles", (("link", "ONLINE"),))] == 3
+    assert samples[("fleet_control_traffic_safety", (("check", "stalled"),))] == 2
+    assert samples[("fleet_control_traffic_safety", (("check", "cycles"),))] == 0
     key = (("connection", "ONLINE"), ("operating_mode", "AUTOMATIC"))
     assert samples[("fleet_vehicles", key)] == 3
     assert samples[("fleet_transport_orders", (("status", "IN_PROGRESS"),))] == 2

@@ -10,8 +10,11 @@ from typing import Any
 
 import pytest
 
+import vda5050
 from control.execution import LayoutIndex, NodePlace
+from control.metrics import ControlMetrics
 from control.ports import ActiveOrder
+from simulator import wire
 from simulator.delays import DelayConfig, DelayInjector
 from tests.control.sim_world import SimWorld
 
@@ -166,3 +169,22 @@ def test_a_vehicle_offline_mid_order_is_an_obstacle_then_readopted_and_finishes(
     assert world.checker.count == 0
     assert traffic.tracked["sim/AGV-1"].static is None
     assert not any("beyond" in p for p in traffic.problems)
+
+
+def test_metrics_carry_the_safety_net_and_count_traffic_problems() -> None:
+    world = World(["AGV-1", "AGV-2"], traffic=True)
+    world.run(1.0)
+    metrics = ControlMetrics(world.controller)
+    snapshot = metrics.snapshot()
+    assert snapshot["traffic_safety"] == {"cycles": 0, "stalled": 0}
+    assert snapshot["counters"]["traffic_problems"] == 0
+
+    # A third vehicle reports standing where AGV-1 is registered: traffic cannot place it.
+    for state in wire.states(world.vehicles["AGV-1"]):
+        payload = vda5050.encode(state).replace(b'"AGV-1"', b'"AGV-9"')
+        world.controller.handle_message(World.topic("AGV-9", "state"), payload)
+
+    assert metrics.snapshot()["counters"]["traffic_problems"] == 1
+    traffic = world.controller.traffic
+    assert traffic is not None
+    assert any(p.startswith("cannot place sim/AGV-9") for p in traffic.problems)
