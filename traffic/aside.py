@@ -17,6 +17,8 @@ the ADG release guarantee (no collision, acyclic waits) is untouched.
   `step_aside` each of them (at most `ASIDE_LIMIT`) is sent to the nearest node off that route
   where it may stay, then the plan is tried once more. A vehicle sent aside keeps no goals; its
   caller plans its own task again when it reports the end of its route.
+- **Late plans** (`_late`, for `improve_budget`): the vehicles whose plan reaches their next
+  goal much later than driving alone would, which `tick()` re-plans in turn.
 """
 
 from __future__ import annotations
@@ -71,6 +73,7 @@ class Lifelong(Execution):
 
     graphs: list[ClassGraph]
     replan_after: float
+    improve_slack: float
     refuge_cost: list[float] | None
 
     def _commit(  # pragma: no cover (the manager's)
@@ -179,6 +182,27 @@ class Lifelong(Execution):
                     break
                 nodes.append(node)
         return nodes
+
+    def _late(self, now: float) -> list[int]:
+        """Vehicles whose plan reaches its next goal more than `improve_slack` s later than
+        from their decision point alone on the layout, latest first (not re-planned within
+        `replan_after`)."""
+        late: list[tuple[float, int]] = []
+        for v in self._vehicles:
+            if v.static or now - v.replanned_at < self.replan_after:
+                continue
+            b, last = v.base, len(v.route) - 1
+            stop = next((s for s in v.stops if b < s <= last), -1)
+            if stop < 0:
+                continue
+            goal = v.route[stop]
+            graph = self.graphs[v.cls]
+            alone = graph.cost_to(graph.to(goal), v.route[b], v.headings[b])
+            lateness = v.arrive[stop] - max(now, v.arrive[b]) - alone
+            if lateness > self.improve_slack:
+                late.append((-lateness, v.idx))
+        late.sort()
+        return [idx for _, idx in late]
 
 
 __all__ = ["ASIDE_LIMIT", "Lifelong"]

@@ -229,7 +229,7 @@ class TrafficManager(Commit):
         if not remaining or v.static:
             return None
         partial = not v.complete and len(remaining) == 1
-        return self._plan(v, remaining, now, partial, to_base=self.replan_to_base)
+        return self._plan(v, remaining, now, partial, to_base=self.replan_to_base, same_plan=True)
 
     def park(self, vehicle_id: str, now: float, *, candidates: int = 8) -> Plan:
         """Send a vehicle to the nearest parking node where it may stay (NoPlanError if none)."""
@@ -256,7 +256,10 @@ class TrafficManager(Commit):
         *,
         refuge: bool | None = None,
         to_base: bool = True,
+        same_plan: bool = False,
     ) -> Plan | None:
+        """Search and commit; with `same_plan` (a re-plan, whose goals are the rest of the
+        vehicle's plan) nothing is committed if another thread gave it a new plan meanwhile."""
         if v.static:
             return None
         refuge = self.goal_refuge if refuge is None else refuge
@@ -273,7 +276,9 @@ class TrafficManager(Commit):
                 # start once made a route that went from a node to itself.)
                 self.searches_repeated += 1
                 self.searches_moved += moved
-                if v.static:
+                if v.static or (same_plan and v.plan_id != before[0]):
+                    # (a re-plan of an order that ended meanwhile gave the idle vehicle a
+                    # route to the old goals, its base held against everyone until its next)
                     return None
                 path = self._search(self._searcher(v, goals, now, partial, refuge), None)
         if path is None or (not to_base and path.stops[:1] == [0]):
@@ -376,24 +381,3 @@ class TrafficManager(Commit):
         else:
             self._unchanged.pop(v.idx, None)
         return list(plan.releases) if plan is not None else []
-
-    def _late(self, now: float) -> list[int]:
-        """Vehicles whose plan reaches its next goal more than `improve_slack` s later than
-        from their decision point alone on the layout, latest first (not re-planned within
-        `replan_after`)."""
-        late: list[tuple[float, int]] = []
-        for v in self._vehicles:
-            if v.static or now - v.replanned_at < self.replan_after:
-                continue
-            b, last = v.base, len(v.route) - 1
-            stop = next((s for s in v.stops if b < s <= last), -1)
-            if stop < 0:
-                continue
-            goal = v.route[stop]
-            graph = self.graphs[v.cls]
-            alone = graph.cost_to(graph.to(goal), v.route[b], v.headings[b])
-            lateness = v.arrive[stop] - max(now, v.arrive[b]) - alone
-            if lateness > self.improve_slack:
-                late.append((-lateness, v.idx))
-        late.sort()
-        return [idx for _, idx in late]

@@ -63,3 +63,33 @@ def test_a_failing_tick_does_not_stop_the_order_sync(monkeypatch: pytest.MonkeyP
     monkeypatch.setattr(manager, "tick", broken)
     rig.link.tick(10.0)  # logged and counted, not raised
     assert rig.link.problems == {"traffic tick failed on map m: KeyError((119, 119))": 1}
+
+
+def test_a_re_plan_whose_vehicle_started_afresh_meanwhile_is_dropped() -> None:
+    # a waits behind c; its tick re-plan searches unlocked, and meanwhile its order ends
+    # (cancelled mid-route: control blocks and restores it where it stands). Searching again
+    # with the old order's goals would give the idle vehicle a route nobody drives, its
+    # released base held against everyone until its next order.
+    m = manager(LANE, {"a": "0,0", "c": "0,1"}, policy=ONE_STEP)
+    m.plan("c", "0,5", 0.0)
+    m.plan("a", "0,4", 0.0)
+    plan_id = m.vehicle("a").plan_id
+
+    @contextmanager
+    def meanwhile() -> Iterator[None]:
+        yield
+        m.unlocked = None
+        m.block("a", 1.0)
+        m.restore("a", "0,0", 1.0)
+        m.unlocked = meanwhile
+
+    m.unlocked = meanwhile
+    assert m.replan("a", 1.0) is None
+
+    a = m.vehicle("a")
+    assert a.plan_id == plan_id + 1  # the restart, and no plan on top of it
+    assert [m.layout.node_ids[n] for n in a.route] == ["0,0"]
+    assert (a.base, a.passed) == (0, 0)
+    assert m.searches_moved == 1
+    m.unlocked = None
+    assert m.plan("a", "0,3", 2.0).nodes[0] == "0,0"  # its next order starts where it stands
