@@ -197,7 +197,11 @@ def _causal(
 
 
 def api(args: argparse.Namespace) -> dict[str, Any]:
-    """POST transport orders at `rate`/s; time POST → the order's first message on MQTT."""
+    """POST transport orders at `rate`/s; time POST → the order's first message on MQTT.
+
+    Each order is pick → drop for whichever vehicle dispatch finds (an idle vehicle left on a
+    drop station is sent to park when an order needs the station); with `intended` the orders
+    name their vehicle round-robin and add a last step at its home."""
     layout = json.loads(Path(args.layout).read_text())
     fleet = json.loads(Path(args.fleet).read_text())  # [serial number, home park station]
     picks = [s["id"] for s in layout["stations"] if s["kind"] == "PICK"]
@@ -226,16 +230,16 @@ def api(args: argparse.Namespace) -> dict[str, Any]:
     n = 0
     while (due := t0 + n / args.rate) < end:
         time.sleep(max(0.0, due - time.perf_counter()))
-        serial, home = fleet[n % len(fleet)]
-        body = {
-            "steps": [
-                {"station": rng.choice(picks), "operation": "PICK"},
-                {"station": rng.choice(drops), "operation": "DROP"},
-                {"station": home, "operation": "ACTION", "action_type": "stopCharging"},
-            ],
-            "intended_vehicle": serial,
-            "external_ref": f"LOAD-{n}",
-        }
+        steps = [
+            {"station": rng.choice(picks), "operation": "PICK"},
+            {"station": rng.choice(drops), "operation": "DROP"},
+        ]
+        body: dict[str, Any] = {"steps": steps, "external_ref": f"LOAD-{n}"}
+        if args.intended:
+            # each order names its vehicle in turn and sends it back home at the end
+            serial, home = fleet[n % len(fleet)]
+            steps.append({"station": home, "operation": "ACTION", "action_type": "stopCharging"})
+            body["intended_vehicle"] = serial
         request = urllib.request.Request(
             f"{args.url}/api/v1/orders/",
             data=json.dumps(body).encode(),
@@ -321,6 +325,9 @@ def main() -> None:
     parser.add_argument("--layout", default="")
     parser.add_argument("--rate", type=float, default=1.0)
     parser.add_argument("--fleet", default="", help="JSON [[serial, home station], ...]")
+    parser.add_argument(
+        "--intended", action="store_true", help="orders name their vehicle round-robin"
+    )
     parser.add_argument("--causes", default="", help="control's CONTROL_CAUSE_LOG (raw)")
     parser.add_argument("--grace", type=float, default=5.0, help="wait for the last orders")
     args = parser.parse_args()

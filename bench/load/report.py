@@ -143,6 +143,7 @@ def report(
             "state_interval": args.state_interval,
             "visualization_hz": args.visualization_hz,
             "order_rate": args.order_rate,
+            "orders_name_their_vehicle": args.intended,
             "traffic": args.traffic,
             "max_queued_messages": args.max_queued,
             "time_scale": args.time_scale,

@@ -18,6 +18,7 @@ probes' figures, and the load average. Figures go to stdout and bench/results/lo
 import argparse
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -58,6 +59,9 @@ sys_interval 1
 log_dest stderr
 log_type error
 log_type warning
+# notices name the client whose queue overflowed ("Outgoing messages are being dropped for
+# client X"): the run reports them next to the $SYS count
+log_type notice
 """
 
 
@@ -233,6 +237,7 @@ def measure(
                 str(work / "vehicles.json"),
                 "--rate",
                 str(args.order_rate),
+                *(["--intended"] if args.intended else []),
             ),
             os.environ.copy(),
             work,
@@ -283,7 +288,19 @@ def measure(
     if timeline:
         probe_results["api"]["stages"] = order_stages(db_url, timeline)
     memory = {child.name: child.rss_mb() for child in children}
-    return report(args, before, after, probe_results, memory, registered_s, info)
+    figures = report(args, before, after, probe_results, memory, registered_s, info)
+    figures["broker_dropping_clients"] = dropping_clients(work / "mosquitto.log")
+    return figures
+
+
+def dropping_clients(log: Path) -> list[str]:
+    """The clients Mosquitto dropped outgoing messages for (it logs each when it starts)."""
+    if not log.exists():
+        return []
+    found = re.findall(
+        r"Outgoing messages are being dropped for client (\S+?)\.?$", log.read_text(), re.M
+    )
+    return sorted(set(found))
 
 
 def sample(
@@ -313,6 +330,12 @@ def main() -> None:
     add("--state-interval", type=float, default=0.45, help="s between periodic states")
     add("--visualization-hz", type=float, default=1.0)
     add("--order-rate", type=float, default=1.0, help="transport orders posted per second")
+    add(
+        "--intended",
+        action="store_true",
+        help="orders name their vehicle round-robin and end at its home (before the tenth "
+        "round; default: any free vehicle, pick then drop)",
+    )
     add("--speed", type=float, default=1.0)
     add("--time-scale", type=float, default=4.0, help="simulated time runs this much faster")
     add("--no-traffic", dest="traffic", action="store_false")

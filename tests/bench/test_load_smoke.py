@@ -43,6 +43,8 @@ def test_quick_load_run_measures_every_figure(tmp_path: Path) -> None:
     assert raw["by_topic_per_s"]["state"] > 0
     assert 0.8 < figures["receive_ratio_control_to_raw"] <= 1.05
     assert control["decode_errors"] == 0
+    assert control["traffic_safety"] == {"cycles": 0, "stalled": 0}
+    assert control["traffic_problems"] == 0
     assert figures["cpu_share"]["control"] > 0
     assert figures["control_cpu_vs_raw_subscriber"] is not None
     assert figures["memory_rss_mb"]["control"] > 0
