@@ -31,6 +31,13 @@ class VehicleConfig:
     misbehaviour: Misbehaviour = Misbehaviour()
 
     @property
+    def wall_speed(self) -> float:
+        """The top speed a master control sees on its wall clock (the factsheet's speedMax):
+        with `time_scale` the vehicle covers that many simulated seconds per wall second, and
+        plans made at the simulated speed would be `time_scale` times too slow."""
+        return self.speed * self.time_scale
+
+    @property
     def major(self) -> int:
         """Protocol major version (2 for 2.0/2.1, 3 for 3.0): selects the message edge."""
         return major_of(self.version)

@@ -168,7 +168,7 @@ def factsheet_message(vehicle: VirtualVehicle) -> Factsheet:
     cfg = vehicle.config
     return build_factsheet(
         **_header(vehicle, TopicKind.FACTSHEET),
-        speed_max=cfg.speed,
+        speed_max=cfg.wall_speed,
         state_interval=cfg.state_interval,
         visualization_hz=cfg.visualization_hz,
         with_vehicle_config=is_v21(cfg.version),

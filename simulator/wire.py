@@ -129,7 +129,7 @@ def factsheet(vehicle: VirtualVehicle) -> Factsheet | v3.Factsheet:
         **vehicle.headers.header(
             cfg.manufacturer, cfg.serial_number, TopicKind.FACTSHEET, cfg.version
         ),
-        speed_max=cfg.speed,
+        speed_max=cfg.wall_speed,
         state_interval=cfg.state_interval,
         visualization_hz=cfg.visualization_hz,
     )

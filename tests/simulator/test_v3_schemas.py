@@ -198,3 +198,13 @@ def test_misbehaving_3_0_vehicle_messages_validate() -> None:
     assert ("simulatedFatalError", "FATAL") in errors
     assert states[-1].operating_mode is v3.OperatingMode.SERVICE
     assert len({s.header_id for s in states}) < len(states)  # duplicates happened
+
+
+@pytest.mark.parametrize("version", ["2.0.0", "2.1.0", "3.0.0"])
+def test_a_faster_than_real_time_vehicle_declares_its_wall_clock_speed(version: str) -> None:
+    # control plans on the wall clock: at time scale 4 a 1 m/s vehicle covers 4 m a second
+    factsheet = json.loads(encode(wire.factsheet(make_vehicle(version=version, time_scale=4.0))))
+    physical = factsheet["physicalParameters"]
+    assert physical.get("speedMax", physical.get("maximumSpeed")) == 4.0
+    real_time = json.loads(encode(wire.factsheet(make_vehicle(version=version))))
+    assert real_time["physicalParameters"] != physical
