@@ -280,34 +280,55 @@ def api(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def ws(args: argparse.Namespace) -> dict[str, Any]:
-    """Count live-page websocket messages and vehicle rows per second."""
+    """Count live-page websocket messages and vehicle rows per second; a connection the server
+    closes is counted (with its reason) and opened again, as the page does."""
     import websockets
 
     url = args.url.replace("http://", "ws://") + "/ws/live/"
     headers = {"Cookie": f"sessionid={args.session}", "Origin": args.url}
-    counts = {"messages": 0, "vehicle_rows": 0, "bytes": 0}
+    counts = {"messages": 0, "vehicle_rows": 0, "bytes": 0, "closed": 0}
+    reasons: list[str] = []
+
+    async def receive(socket: Any, end: float) -> None:
+        while (left := end - time.perf_counter()) > 0:
+            try:
+                text = await asyncio.wait_for(socket.recv(), timeout=left)
+            except TimeoutError:
+                return
+            counts["messages"] += 1
+            counts["bytes"] += len(text)
+            data = json.loads(text)
+            counts["vehicle_rows"] += len(data.get("payload", {}).get("vehicles", []))
 
     async def run() -> float:
-        async with websockets.connect(url, additional_headers=headers, max_size=None) as socket:
-            _wait_until(args.start)
-            t0 = time.perf_counter()
-            end = t0 + args.seconds
-            while (left := end - time.perf_counter()) > 0:
-                try:
-                    text = await asyncio.wait_for(socket.recv(), timeout=left)
-                except TimeoutError:
-                    break
-                counts["messages"] += 1
-                counts["bytes"] += len(text)
-                data = json.loads(text)
-                counts["vehicle_rows"] += len(data.get("payload", {}).get("vehicles", []))
-            return time.perf_counter() - t0
+        window: list[float] = []  # [start, end], set once the first connection is open
+
+        def begin() -> float:
+            if not window:
+                _wait_until(args.start)  # connected (and watching) before the window opens
+                window.extend([time.perf_counter(), time.perf_counter() + args.seconds])
+            return window[1]
+
+        while not window or window[1] - time.perf_counter() > 0:
+            try:
+                async with websockets.connect(
+                    url, additional_headers=headers, max_size=None
+                ) as socket:
+                    await receive(socket, begin())
+            except (websockets.ConnectionClosed, OSError) as exc:
+                counts["closed"] += 1
+                reasons.append(str(exc)[:120])
+                begin()
+                await asyncio.sleep(1.0)
+        return time.perf_counter() - window[0]
 
     wall = asyncio.run(run())
     return {
         "messages_per_s": round(counts["messages"] / wall, 1),
         "vehicle_rows_per_s": round(counts["vehicle_rows"] / wall, 1),
         "kbytes_per_s": round(counts["bytes"] / wall / 1024, 1),
+        "closed_by_server": counts["closed"],
+        "close_reasons": sorted(set(reasons))[:3],
     }
 
 

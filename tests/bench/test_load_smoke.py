@@ -55,5 +55,6 @@ def test_quick_load_run_measures_every_figure(tmp_path: Path) -> None:
     assert figures["api"]["published"] > 0
     assert figures["api"]["post_to_published_p95_ms"] is not None
     assert figures["browser"]["messages_per_s"] > 0
+    assert figures["browser"]["closed_by_server"] == 0
     assert figures["db_rows_per_s"]["updated"] > 0
     assert "exit codes" in run.stdout
