@@ -10,7 +10,14 @@ from collections.abc import Callable
 
 import vda5050
 from control.capabilities import sends_max_speed
-from control.execution import LayoutIndex, OrderExecution, Phase, Progress, Window
+from control.execution import (
+    LayoutIndex,
+    OrderExecution,
+    Phase,
+    Progress,
+    Window,
+    passed_index,
+)
 from control.live import LiveVehicle
 from control.order_messages import (
     LoadJob,
@@ -209,7 +216,7 @@ class OrderDriver:
             return
         if self.traffic is not None and self.traffic.lost(vehicle, execution.vda_order_id):
             return  # traffic plans it again once the vehicle waits at its decision point
-        passed = _passed(state)
+        passed = passed_index(state)
         if state.new_base_request:
             passed = max(passed, execution.released_until)  # waiting at the decision point
         window = extension_window(
@@ -306,18 +313,6 @@ class OrderDriver:
     def _end(self, progress: Progress) -> None:
         self.progress.append(progress)
         self._ended.add(progress.order_id)
-
-
-def _passed(state: vda5050.State) -> int:
-    """The route index of the last node the vehicle passed (our sequence ids are 2·index).
-
-    A vehicle that took a new order keeps the previous order's lastNodeSequenceId until it
-    passes the new first node; it still lists that node (sequence id 0), and read as progress
-    the old id would release the new base too far ahead."""
-    last = state.last_node_sequence_id or 0
-    if any(node.sequence_id <= last for node in state.node_states):
-        return 0  # not a sequence id of this order: nothing of it passed yet
-    return last // 2
 
 
 def _released_until(state: vda5050.State) -> int:

@@ -337,6 +337,19 @@ class OrderExecution:
         return None
 
 
+def passed_index(state: vda5050.State) -> int:
+    """The route index of the last node the vehicle passed (our sequence ids are 2·index).
+
+    A vehicle that took a new order keeps the previous order's lastNodeSequenceId until it
+    passes the new first node; it still lists that node (sequence id 0), and read as progress
+    the old id would release the new base too far ahead (and traffic would see the vehicle
+    beyond its base when the new route passes the same node at that index: a round trip)."""
+    last = state.last_node_sequence_id or 0
+    if any(node.sequence_id <= last for node in state.node_states):
+        return 0  # not a sequence id of this order: nothing of it passed yet
+    return last // 2
+
+
 def _statuses(state: vda5050.State) -> dict[str, str]:
     """actionStatus by actionId."""
     return {a.action_id: str(a.action_status) for a in state.action_states}

@@ -20,7 +20,7 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 import vda5050
-from control.execution import LayoutIndex
+from control.execution import LayoutIndex, passed_index
 from control.live import LiveVehicle
 from control.parking import IdleParking
 from control.session import Link
@@ -176,14 +176,16 @@ class TrafficLink(OrderWindows):
             return self._mode_change(tracked, reason, state, now)
         if tracked.order_id is None or state.order_id != tracked.order_id:
             return []
-        passed = (state.last_node_sequence_id or 0) // 2 - tracked.offset
         v = manager.vehicle(name(vehicle))
+        if (state.last_node_sequence_id or 0) // 2 - tracked.offset <= v.passed:
+            return []  # no progress (most states): on_progress would do nothing either
+        # (the previous order's sequence id, which a vehicle keeps until it passes the first
+        # node of the new one, reads as index 0: nothing passed yet)
+        passed = passed_index(state) - tracked.offset
         if not 0 <= passed < len(v.route) or manager.layout.node_ids[v.route[passed]] != (
             state.last_node_id
         ):
-            # Not a node of this plan: the sequence id of the previous order, which a vehicle
-            # keeps until it passes the first node of the new one.
-            return []
+            return []  # not a node of this plan
         try:
             releases = manager.on_progress(name(vehicle), passed, now)
         except ValueError as exc:  # beyond its base: it drove what we never released

@@ -169,6 +169,8 @@ class ReservationTable:
         """Whether `vehicle` may hold `resource` during [start, end]: no other vehicle's hold
         in its list overlaps it (a released one counts from -inf), i.e. it lies inside one of
         `safe_intervals(resource, vehicle)`."""
+        if start == end:  # an instant: also refused on the seam of two holds (merged there)
+            return any(a <= start <= b for a, b in self.safe_intervals(resource, vehicle))
         for hold in self.blocked[resource]:
             if hold.vehicle != vehicle and hold.key < end and hold.end > start:
                 return False

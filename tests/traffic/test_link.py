@@ -3,6 +3,7 @@
 import time
 from datetime import UTC, datetime
 
+import msgspec
 import pytest
 
 import vda5050
@@ -297,3 +298,33 @@ def test_vehicles_offline_at_once_are_all_blocked_before_those_behind_are_re_pla
     assert [rig.link.tracked[f"sim/{s}"].static for s in "ABC"] == ["offline", "offline", None]
     assert replanned.count("sim/C") == 1  # once, after both blocks, not once per block
     assert not {"sim/A", "sim/B"} & set(replanned)
+
+
+def test_the_previous_order_s_sequence_id_is_not_progress_on_a_round_trip() -> None:
+    # A vehicle keeps the old order's lastNodeSequenceId until it passes the new first node;
+    # on a round trip the new route passes the same node at that index again (found in a load
+    # run: orders home -> pick -> drop -> home, read as finished at once, beyond the base).
+    rig = Rig(("A", "W2"))
+    rig.start("A", ["W2", "W1", "C"], "W1")
+    rig.report("A", state("A", "W1", order_id="O-A", seq=2, pending=("C",)))
+    rig.report("A", state("A", "C", order_id="O-A", seq=4))
+    rig.link.ended(rig.vehicles["A"], time.monotonic())
+    back = OrderExecution.plan(
+        transport_order_id=2, vda_order_id="O-A2", route=["C", "E1", "C"], pickup="E1"
+    )
+    assert rig.link.first_window(rig.vehicles["A"], back, "m", None) is not None
+    manager = rig.link.managers["m"]
+    assert manager.vehicle("sim/A").route[2] == manager.layout.index["C"]
+
+    # taken, standing on C: still the old sequence id 4, every node of the new order listed
+    taken = msgspec.structs.replace(
+        state("A", "C", order_id="O-A2", seq=4),
+        node_states=[
+            vda5050.NodeState(node_id=n, sequence_id=2 * i, released=i == 0)
+            for i, n in enumerate(["C", "E1", "C"])
+        ],
+    )
+    rig.report("A", taken)
+
+    assert manager.vehicle("sim/A").passed == 0
+    assert rig.link.problems == {}

@@ -13,7 +13,7 @@ from contextlib import contextmanager
 from typing import Any
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from control.execution import OrderExecution
@@ -188,6 +188,7 @@ def _execution(serial: str) -> OrderExecution:
     start=st.floats(0, 60),
     length=st.floats(0, 20),
 )
+@example(holds=[(1, 0.0, 1.0, False), (1, 1.0, 0.5, False)], start=1.0, length=0.0)  # a seam
 def test_admits_is_lying_inside_a_safe_interval(holds, start, length) -> None:
     table = ReservationTable(1)
     for vehicle, begin, span, released in holds:
