@@ -28,7 +28,11 @@ from traffic.sipp import ANY_HEADING, ClassGraph
 logger = logging.getLogger(__name__)
 
 PARK_EVERY = 30.0  # s before the same vehicle may be sent to park again (a refused request)
-WAITING_FOR = 10.0  # s a vehicle whose order found no plan counts as busy, not idle
+# s a vehicle whose order finds no plan counts as busy, not idle (it will leave by itself);
+# after that it is stuck, e.g. on the goal of the very order that holds its own goal, and may
+# be sent to park like an idle one (a load run's orders, each dispatched to the vehicle left
+# on a drop station, waited for each other in pairs for good)
+WAITING_FOR = 10.0
 
 
 def choose_station(
@@ -115,12 +119,13 @@ class IdleParking:
     request_job: Callable[[dict[str, Any]], None]  # a `vehicle.park` job for the flush
     every: float = PARK_EVERY
     sent: dict[str, tuple[float, str]] = field(default_factory=dict)  # name -> (when, node)
-    waiting: dict[str, float] = field(default_factory=dict)  # name -> when its plan failed
+    # name -> when its order first found no plan (until it gets one)
+    waiting: dict[str, float] = field(default_factory=dict)
     count: int = 0  # park requests made (for tests and the logs)
 
     def failed(self, name: str, now: float) -> None:
-        """`name` has an order that found no plan now: it is not idle (never parked for it)."""
-        self.waiting[name] = now
+        """`name` has an order that found no plan now: for WAITING_FOR s it is not idle."""
+        self.waiting.setdefault(name, now)
 
     def planned(self, name: str) -> None:
         self.waiting.pop(name, None)
@@ -188,7 +193,7 @@ class IdleParking:
             return False  # asked already: the job is on its way (or was refused, try later)
         waiting = self.waiting.get(name)
         if waiting is not None and now - waiting < WAITING_FOR:
-            return False  # its own order waits to start: it will leave by itself
+            return False  # its own order waits to start: it may leave by itself
         return is_idle(vehicle)
 
     def unavailable(

@@ -10,7 +10,7 @@ PUMP_TICK_HZ = 10.0  # bench.load.run starts the pumps with --tick-hz 10
 # control counters reported as their growth in the window
 TRAFFIC_COUNTERS = (
     *("traffic_searches_repeated", "traffic_searches_moved"),
-    *("traffic_replans", "traffic_replans_unchanged", "traffic_problems"),
+    *("traffic_replans", "traffic_replans_unchanged", "traffic_problems", "traffic_no_plan"),
 )
 
 

@@ -7,11 +7,14 @@ is sent to a park station (a `vehicle.park` job, opened here like the flush woul
 finishes, with no collision seen by the simulator's checker.
 """
 
+import dataclasses
+import time
 from collections import deque
 from typing import Any
 
 import pytest
 
+from control import parking
 from control.execution import LayoutIndex, NodePlace
 from control.ports import ActiveOrder
 from tests.control.sim_world import SimWorld
@@ -142,3 +145,57 @@ def test_a_vehicle_left_on_a_station_after_its_order_is_parked_for_the_next() ->
     assert [j["vehicle"] for j in world.park_jobs] == [2]
     assert world.vehicles["AGV-2"].last_node_id in {"PK1", "PK2"}
     assert world.checker.count == 0
+
+
+def test_two_vehicles_each_on_the_other_s_goal_are_not_stuck_for_good(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """AGV-1's order ends where AGV-2 stands and AGV-2's where AGV-1 stands (both left on a
+    station by their last order and given the next): neither finds a plan, and neither leaves
+    by itself. Once stuck longer than WAITING_FOR, one is sent to park and both finish."""
+    monkeypatch.setattr(parking, "WAITING_FOR", 0.5)  # seconds of control's (real) clock
+    world = Redispatching({"AGV-1": "W1", "AGV-2": "W5"}, park_idle=True)
+    world.transport("AGV-1", "W3", "W5")
+    world.transport("AGV-2", "W3", "W1")
+    traffic = world.controller.traffic
+    assert traffic is not None
+    assert traffic.parking is not None
+    for name in ("sim/AGV-1", "sim/AGV-2"):  # both orders found no plan a moment ago
+        traffic.parking.failed(name, time.monotonic())
+
+    deadline = time.monotonic() + 30.0
+    while not {1, 2} <= world.finished and time.monotonic() < deadline:
+        world.run(2.0)
+        time.sleep(0.05)
+
+    assert {1, 2} <= world.finished
+    assert world.park_jobs  # what broke the wait
+    assert world.vehicles["AGV-1"].last_node_id == "W5"
+    assert world.vehicles["AGV-2"].last_node_id == "W1"
+    assert world.checker.count == 0
+
+
+class Redispatching(World):
+    """A transport order requeued because its vehicle left the route's start (it was parked)
+    gets a new route from where the vehicle stands, as dispatch would give it."""
+
+    def collect(self) -> None:
+        batch = self.controller.collect_flush()
+        self.finished |= {p.order_id for p in batch.progress if p.kind == "finished"}
+        assert [p for p in batch.progress if p.kind == "failed"] == []
+        for progress in batch.progress:
+            if progress.kind == "requeued":
+                self._reroute(progress.order_id)
+        self.take_jobs(batch.job_requests)
+
+    def _reroute(self, order_id: int) -> None:
+        i, order = next(
+            (i, o) for i, o in enumerate(self.orders) if o.transport_order_id == order_id
+        )
+        here = self.vehicles[self.serials[order.vehicle_pk - 1]].last_node_id
+        pickup, drop = order.pickup_node, order.route[-1]
+        route = shortest(here, pickup)[:-1] + shortest(pickup, drop)
+        self.orders[i] = dataclasses.replace(order, route=route)
+        # dispatch took it back: one read of the active orders does not list it
+        rest = [o for o in self.orders if o.transport_order_id not in self.finished | {order_id}]
+        self.controller.sync(rest)
