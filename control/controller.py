@@ -65,6 +65,7 @@ class Controller(PeriodicWork):
         horizon: int | None = None,
         traffic: bool = False,
         park_idle: bool = True,
+        park_after: float = 0.0,
         liveness_probe_after: float = PROBE_AFTER,
         liveness_probe_grace: float = PROBE_GRACE,
         motion_flush_interval: float = 0.0,
@@ -86,10 +87,15 @@ class Controller(PeriodicWork):
         self._unflushed_outcomes: list[InstantActionTrack] = []  # from a failed flush
         self._job_requests: list[dict[str, Any]] = []  # the flush opens charge sessions, moves
         # Traffic management releases bases; off: a fixed `base_ahead` (single-vehicle sites).
-        # `park_idle`: idle vehicles in the way of an order are sent to park (control/parking.py).
+        # `park_idle`: idle vehicles in the way of an order are sent to park (control/parking.py),
+        # and with `park_after` > 0 those idle that long off a park station too.
         park = (lambda job: self._job_requests.append(job)) if park_idle else None
         fleet = lambda: list(self.fleet.vehicles.values())  # noqa: E731
-        self.traffic = TrafficLink(fleet, park=park, lock=self.lock) if traffic else None
+        self.traffic = (
+            TrafficLink(fleet, park=park, park_after=park_after, lock=self.lock)
+            if traffic
+            else None
+        )
         self.waits = WaitLog()  # traffic waits as episodes, for the reports (control.wait_log)
         self.driver = OrderDriver(
             self.publisher,

@@ -86,6 +86,9 @@ class OrderDriver:
         for pk, (_, order) in self._added.items():
             self._orders.setdefault(pk, order)  # taken after the read began: not in it yet
         self._ended &= self._orders.keys()  # forget what the database closed
+        if self.traffic is not None:
+            busy = {o.vehicle_pk for o in self._orders.values()}
+            self.traffic.park_stale(busy, time.monotonic())
 
     def add_orders(self, orders: list[ActiveOrder]) -> None:
         """Take orders read on their own (named by an `order.assigned` command) next to those

@@ -117,11 +117,15 @@ class IdleParking:
     """Sends idle vehicles that stand in an order's way to a free park station."""
 
     request_job: Callable[[dict[str, Any]], None]  # a `vehicle.park` job for the flush
+    # s an idle vehicle may stand off a park station (on a drop station, mid-aisle) before it
+    # is sent to park unasked; 0: only when in an order's way (`park_stale`)
+    park_after: float = 0.0
     every: float = PARK_EVERY
     sent: dict[str, tuple[float, str]] = field(default_factory=dict)  # name -> (when, node)
     # name -> when its order first found no plan (until it gets one)
     waiting: dict[str, float] = field(default_factory=dict)
     count: int = 0  # park requests made (for tests and the logs)
+    idle_since: dict[str, float] = field(default_factory=dict)  # name -> idle off a station
 
     def failed(self, name: str, now: float) -> None:
         """`name` has an order that found no plan now: for WAITING_FOR s it is not idle."""
@@ -162,30 +166,84 @@ class IdleParking:
                 continue  # not standing in the way (cheap first: most vehicles are not)
             if name == mover or other.static or not self._may_send(name, vehicle, now):
                 continue
-            here = other.route[-1]
             if taken is None:
                 taken = self.unavailable(manager, index, vehicles, steps, now)
-            free = {layout.index[n] for n in index.parking.values() if n not in taken}
-            found = nearest(manager.graphs[other.cls], here, free, mover_stands)
-            seconds = {layout.node_ids[n]: cost for n, cost in found.items()}
-            station = choose_station(index.parking, seconds, taken)
-            if station is None:
-                logger.info("traffic: no free park station for %s (%s)", name, reason)
-                continue
-            taken.add(index.parking[station])
-            self.sent[name] = (now, index.parking[station])
-            self.count += 1
-            self.request_job(
-                {
-                    "kind": "vehicle.park",
-                    "vehicle": vehicle.pk,
-                    "station": station,
-                    "reason": reason,
-                }
-            )
-            logger.info("traffic: %s sent to park at %s (%s)", name, station, reason)
-            sent.append(name)
+            if self._send(manager, index, name, vehicle, taken, mover_stands, now, reason):
+                sent.append(name)
         return sent
+
+    def park_stale(
+        self,
+        manager: TrafficManager,
+        index: LayoutIndex,
+        vehicles: Mapping[str, LiveVehicle],
+        busy: Collection[int],
+        now: float,
+    ) -> list[str]:
+        """Send to park the vehicles that stood idle off a park station for `park_after` s
+        with no order assigned (`busy`: vehicle pks that have one); returns their names.
+
+        Vehicles left on a drop station hold it until they leave: every later order to that
+        station first had to find no plan and park them (`clear_way`), which stretched the
+        start of most orders in a load run's steady state."""
+        if self.park_after <= 0 or not index.parking:
+            return []
+        layout = manager.layout
+        park_nodes = {layout.index.get(n) for n in index.parking.values()}
+        taken: set[str] | None = None
+        sent = []
+        for name, vehicle in vehicles.items():
+            v = manager.vehicle(name)
+            if (
+                v.static
+                or v.passed != len(v.route) - 1
+                or v.route[-1] in park_nodes
+                or vehicle.pk in busy
+                or not is_idle(vehicle)
+            ):
+                self.idle_since.pop(name, None)
+                continue
+            since = self.idle_since.setdefault(name, now)
+            if now - since < self.park_after or not self._may_send(name, vehicle, now):
+                continue
+            if taken is None:
+                taken = self.unavailable(manager, index, vehicles, [], now)
+            reason = f"idle for {now - since:.0f} s"
+            if self._send(manager, index, name, vehicle, taken, (), now, reason):
+                del self.idle_since[name]
+                sent.append(name)
+        return sent
+
+    def _send(
+        self,
+        manager: TrafficManager,
+        index: LayoutIndex,
+        name: str,
+        vehicle: LiveVehicle,
+        taken: set[str],
+        avoid: Collection[int],
+        now: float,
+        reason: str,
+    ) -> bool:
+        """Ask for a `vehicle.park` job to the nearest free park station (not in `taken`,
+        reached without entering `avoid`); the station is taken from then on."""
+        layout = manager.layout
+        v = manager.vehicle(name)
+        free = {layout.index[n] for n in index.parking.values() if n not in taken}
+        found = nearest(manager.graphs[v.cls], v.route[-1], free, avoid)
+        seconds = {layout.node_ids[n]: cost for n, cost in found.items()}
+        station = choose_station(index.parking, seconds, taken)
+        if station is None:
+            logger.info("traffic: no free park station for %s (%s)", name, reason)
+            return False
+        taken.add(index.parking[station])
+        self.sent[name] = (now, index.parking[station])
+        self.count += 1
+        self.request_job(
+            {"kind": "vehicle.park", "vehicle": vehicle.pk, "station": station, "reason": reason}
+        )
+        logger.info("traffic: %s sent to park at %s (%s)", name, station, reason)
+        return True
 
     def _may_send(self, name: str, vehicle: LiveVehicle, now: float) -> bool:
         last = self.sent.get(name)

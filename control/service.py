@@ -30,6 +30,7 @@ def build_control_loop() -> ControlLoop:
         horizon=max(settings.FLEET_CONTROL.get("HORIZON_NODES", 0), 0) or None,
         traffic=settings.FLEET_CONTROL["TRAFFIC"],
         park_idle=settings.FLEET_CONTROL.get("TRAFFIC_PARK_IDLE", True),
+        park_after=settings.FLEET_CONTROL.get("TRAFFIC_PARK_AFTER", 0.0),
         liveness_probe_after=settings.FLEET_CONTROL.get("LIVENESS_PROBE_AFTER", PROBE_AFTER),
         motion_flush_interval=settings.FLEET_CONTROL.get("MOTION_FLUSH_INTERVAL", 0.0),
     )

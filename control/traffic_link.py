@@ -63,6 +63,7 @@ class TrafficLink(OrderWindows):
         policy: ReleasePolicy | None = None,
         dwell: float = DWELL,
         park: Callable[[dict[str, Any]], None] | None = None,
+        park_after: float = 0.0,
         lock: Any = None,
     ) -> None:
         self.fleet = fleet
@@ -72,7 +73,8 @@ class TrafficLink(OrderWindows):
         self._starting: set[str] = set()  # vehicles whose order start is being planned
         # Idle vehicles in the way of an order that finds no plan are sent to park through
         # `park` (a `vehicle.park` job for the flush); None: they stay (control/parking.py).
-        self.parking = IdleParking(park) if park is not None else None
+        # With `park_after` > 0 vehicles idle that long off a park station are parked too.
+        self.parking = IdleParking(park, park_after) if park is not None else None
         self.policy = policy or ReleasePolicy()
         self.dwell = dwell
         self.managers: dict[str, TrafficManager] = {}
@@ -327,6 +329,15 @@ class TrafficLink(OrderWindows):
             now,
             reason=f"in the way of order {order_id}",
         )
+
+    def park_stale(self, busy: set[int], now: float) -> None:
+        """Send vehicles idle off a park station for `park_after` s to park (none with an
+        order assigned: `busy` holds their pks); see `IdleParking.park_stale`."""
+        if self.parking is None or self.parking.park_after <= 0:
+            return
+        for map_id, manager in self.managers.items():
+            on_map = {n: t.vehicle for n, t in self.tracked.items() if t.map_id == map_id}
+            self.parking.park_stale(manager, self._indexes[map_id], on_map, busy, now)
 
     def ended(self, vehicle: LiveVehicle, now: float) -> None:
         """The vehicle's order is over (finished, failed, cancelled): forget the rest of it."""

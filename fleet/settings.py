@@ -227,6 +227,11 @@ FLEET_CONTROL = {
     "TRAFFIC": env.bool("FLEET_TRAFFIC", default=True),
     # Idle vehicles that keep an order from being planned are sent to a park station.
     "TRAFFIC_PARK_IDLE": env.bool("FLEET_TRAFFIC_PARK_IDLE", default=True),
+    # Seconds an idle vehicle without an order may stand off a park station (on a drop
+    # station, in an aisle) before it is sent to the nearest free one; 0 = off (only when in
+    # an order's way, above). With a steady order stream the next order then finds its
+    # station free instead of parking the vehicle first (docs/LOAD.md, tenth round).
+    "TRAFFIC_PARK_AFTER": env.float("FLEET_TRAFFIC_PARK_AFTER", default=0.0),
     # Seconds of silence before control sends a vehicle one stateRequest; no state within 5 s
     # = UNREACHABLE (a frozen vehicle declaring a 30 s state interval: ~16 s, not 35). 0 = off.
     "LIVENESS_PROBE_AFTER": env.float("FLEET_LIVENESS_PROBE_AFTER", default=10.0),

@@ -144,6 +144,7 @@ def report(
             "visualization_hz": args.visualization_hz,
             "order_rate": args.order_rate,
             "orders_name_their_vehicle": args.intended,
+            "park_after_s": args.park_after,
             "traffic": args.traffic,
             "max_queued_messages": args.max_queued,
             "time_scale": args.time_scale,

@@ -108,6 +108,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         VDA5050_INTERFACE=interface,
         CELERY_TASK_ALWAYS_EAGER="0",
         FLEET_TRAFFIC="1" if args.traffic else "0",
+        # vehicles left on a drop station go to park after 10 s idle (orders go to any vehicle)
+        FLEET_TRAFFIC_PARK_AFTER=str(args.park_after),
         ALLOWED_HOSTS="127.0.0.1,localhost",
         LOG_LEVEL="WARNING",
         API_CLIENT_RATE="100000/min",
@@ -339,6 +341,7 @@ def main() -> None:
     add("--speed", type=float, default=1.0)
     add("--time-scale", type=float, default=4.0, help="simulated time runs this much faster")
     add("--no-traffic", dest="traffic", action="store_false")
+    add("--park-after", type=float, default=10.0, help="idle s before a vehicle parks; 0: off")
     # ~10 s of 1,000 vehicles at 2 messages/s: control rides out a stall without losing any
     add("--max-queued", type=int, default=20000, help="Mosquitto max_queued_messages")
     add("--postgres", default="postgres://postgres@127.0.0.1:5432")

@@ -199,3 +199,37 @@ class Redispatching(World):
         # dispatch took it back: one read of the active orders does not list it
         rest = [o for o in self.orders if o.transport_order_id not in self.finished | {order_id}]
         self.controller.sync(rest)
+
+
+def test_a_vehicle_idle_off_a_park_station_goes_to_park_after_a_while(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """With `park_after`, AGV-2 left on W5 by its order is parked unasked; AGV-1 standing on
+    W1 with an order assigned (not yet started) is not."""
+    world = World({"AGV-1": "W1", "AGV-2": "W4"}, park_idle=True)
+    traffic = world.controller.traffic
+    assert traffic is not None
+    assert traffic.parking is not None
+    traffic.parking.park_after = 0.3  # seconds of control's (real) clock
+    world.transport("AGV-2", "W4", "W5")
+    world.run(60.0)
+    assert world.finished == {1}
+    assert world.park_jobs == []  # not yet: it has only just finished
+
+    time.sleep(0.4)
+    busy = {1}  # AGV-1 (pk 1) has an order assigned
+    traffic.park_stale(busy, time.monotonic())  # the first look: AGV-2 idle from now
+    time.sleep(0.4)
+    traffic.park_stale(busy, time.monotonic())
+    world.collect()
+
+    assert [(j["vehicle"], j["station"]) for j in world.park_jobs] == [(2, "PARK-2")]
+    assert world.park_jobs[0]["reason"].startswith("idle for")
+    for _ in range(300):  # (run() returns at once: every transport order finished)
+        world.run(0.1)
+    assert world.vehicles["AGV-2"].last_node_id == "PK2"
+    assert world.checker.count == 0
+    traffic.park_stale(set(), time.monotonic() + 60.0)  # parked: never sent again
+    world.collect()
+    assert len(world.park_jobs) == 2  # AGV-1 (idle off a station, no order now) goes too
+    assert world.park_jobs[1]["vehicle"] == 1
