@@ -199,9 +199,9 @@ def _causal(
 def api(args: argparse.Namespace) -> dict[str, Any]:
     """POST transport orders at `rate`/s; time POST → the order's first message on MQTT.
 
-    Each order is pick → drop for whichever vehicle dispatch finds (an idle vehicle left on a
-    drop station is sent to park when an order needs the station); with `intended` the orders
-    name their vehicle round-robin and add a last step at its home."""
+    With `intended` each order names its vehicle round-robin: pick → drop → an action at the
+    vehicle's home (so no vehicle stays on a station); otherwise it is pick → drop for
+    whichever vehicle dispatch finds, which then stands on the drop station until parked."""
     layout = json.loads(Path(args.layout).read_text())
     fleet = json.loads(Path(args.fleet).read_text())  # [serial number, home park station]
     picks = [s["id"] for s in layout["stations"] if s["kind"] == "PICK"]

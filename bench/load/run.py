@@ -333,10 +333,11 @@ def main() -> None:
     add("--visualization-hz", type=float, default=1.0)
     add("--order-rate", type=float, default=1.0, help="transport orders posted per second")
     add(
-        "--intended",
-        action="store_true",
-        help="orders name their vehicle round-robin and end at its home (before the tenth "
-        "round; default: any free vehicle, pick then drop)",
+        "--any-vehicle",
+        dest="intended",
+        action="store_false",
+        help="orders are pick then drop for whichever vehicle dispatch finds (default: each "
+        "names its vehicle round-robin and ends at its home; docs/LOAD.md, tenth round)",
     )
     add("--speed", type=float, default=1.0)
     add("--time-scale", type=float, default=4.0, help="simulated time runs this much faster")
