@@ -36,6 +36,7 @@ from control.traffic_support import (
     name,
     vehicle_class,
 )
+from control.traffic_views import TrafficViews
 from control.traffic_windows import OrderWindows
 from traffic import Goal, NoPlanError, Plan, ReleasePolicy, TrafficManager
 
@@ -53,7 +54,7 @@ QUICK_SEARCH = (1000, 2.0)
 REPLAN_BACKOFF = 8
 
 
-class TrafficLink(OrderWindows):
+class TrafficLink(OrderWindows, TrafficViews):
     """Traffic managers of every map and the vehicles they control (call under the lock)."""
 
     def __init__(
@@ -83,6 +84,7 @@ class TrafficLink(OrderWindows):
         self.tracked: dict[str, Tracked] = {}
         self.stats = Stats()
         self.problems: dict[str, int] = {}
+        self._stalled_logged: set[str] = set()  # stalled vehicles already logged
 
     # -- maps and vehicles ------------------------------------------------------------------
 
@@ -382,27 +384,3 @@ class TrafficLink(OrderWindows):
                     manager.tick(now)
             except Exception as exc:  # the order sync after it must go on (starts, resends)
                 self._count(f"traffic tick failed on map {map_id}: {exc!r}")
-
-    # -- for the live page ----------------------------------------------------------------------
-
-    def waiting_for(self, vehicle: LiveVehicle) -> list[str]:
-        """Serial numbers of the vehicles this one waits for at its decision point."""
-        tracked = self.tracked.get(name(vehicle))
-        if tracked is None:
-            return []
-        others = self.managers[tracked.map_id].waiting_for(name(vehicle))
-        return [self.tracked[o].vehicle.serial_number for o in others if o in self.tracked]
-
-    def reserved(self, vehicle: LiveVehicle) -> list[str]:
-        """The node ids the vehicle has planned but not yet released (its reservations)."""
-        tracked = self.tracked.get(name(vehicle))
-        if tracked is None or tracked.order_id is None:
-            return []
-        route, base, _ = self.route(vehicle)
-        return route[base + 1 :]
-
-    def safety(self, now: float) -> dict[str, int]:
-        """The safety net's counters: wait-for cycles and stalled vehicles (both must stay 0)."""
-        cycles = sum(len(m.wait_cycles()) for m in self.managers.values())
-        stalled = sum(len(m.stalled(now)) for m in self.managers.values())
-        return {"cycles": cycles, "stalled": stalled}

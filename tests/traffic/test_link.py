@@ -328,3 +328,20 @@ def test_the_previous_order_s_sequence_id_is_not_progress_on_a_round_trip() -> N
 
     assert manager.vehicle("sim/A").passed == 0
     assert rig.link.problems == {}
+
+
+def test_a_stalled_vehicle_is_counted_and_logged_once_with_its_trail(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    rig = Rig(("A", "W2"))
+    rig.start("A", ["W2", "W1", "C", "E1", "E2"], "W1")  # then no state comes for minutes
+    later = time.monotonic() + 120.0
+
+    with caplog.at_level("WARNING", logger="control.traffic_link"):
+        assert rig.link.safety(later) == {"cycles": 0, "stalled": 1}
+        assert rig.link.safety(later + 2.0) == {"cycles": 0, "stalled": 1}
+
+    lines = [r.getMessage() for r in caplog.records if "stalled" in r.getMessage()]
+    assert len(lines) == 1  # once per stall, not at every look
+    assert "sim/A stalled: passed 0, base 4 of 5 nodes" in lines[0]
+    assert "started O-A: plan" in lines[0]
