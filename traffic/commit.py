@@ -74,6 +74,7 @@ class Commit(Lifelong):
         v.truncate(b)
         if new:
             v.restart(path.nodes[0])
+            v.last_progress = now  # a new route: no progress owed on it yet (not stalled)
             b = 0
         v.node_holds[b].end = path.arrive[1] if len(path.nodes) > 1 else INF
         table.ended(v.node_holds[b])

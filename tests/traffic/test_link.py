@@ -345,3 +345,15 @@ def test_a_stalled_vehicle_is_counted_and_logged_once_with_its_trail(
     assert len(lines) == 1  # once per stall, not at every look
     assert "sim/A stalled: passed 0, base 4 of 5 nodes" in lines[0]
     assert "started O-A: plan" in lines[0]
+
+
+def test_a_vehicle_idle_for_minutes_is_not_stalled_when_its_next_order_starts() -> None:
+    rig = Rig(("A", "W2"), ("B", "N2"))
+    manager = rig.link.managers["m"]
+    for name in ("sim/A", "sim/B"):
+        manager.vehicle(name).last_progress -= 300.0  # both stood idle for five minutes
+    rig.start("A", ["W2", "W1", "C", "E1", "E2"], "W1")
+    rig.start("B", ["N2", "N1", "C", "S1", "S2"], "N1")  # waits for A at N1
+
+    assert rig.link.safety(time.monotonic() + 30.0) == {"cycles": 0, "stalled": 0}
+    assert rig.link.safety(time.monotonic() + 90.0)["stalled"] == 2  # nobody moved since
