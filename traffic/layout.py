@@ -12,7 +12,7 @@ from a grid of free cells (benchmarks, tests).
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Iterable, Mapping, Sequence
+from collections.abc import Collection, Iterable, Sequence
 from dataclasses import dataclass
 
 from traffic.routing import RoutingGraph
@@ -110,7 +110,7 @@ class Layout:
         *,
         pitch: float = 1.0,
         parking: Collection[tuple[int, int]] = (),
-        one_way: Mapping[tuple[int, int], Collection[tuple[int, int]]] | None = None,
+        one_way: dict[tuple[int, int], Collection[tuple[int, int]]] | None = None,
     ) -> Layout:
         """A 4-connected grid of free (row, col) cells, `pitch` metres apart, node ids "r,c".
 

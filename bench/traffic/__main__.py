@@ -46,13 +46,6 @@ def main() -> None:
         "one's plan back at most this long (traffic.switching), or 'off'; default: "
         f"{scenarios.SWITCH_PUSH:g} for S3 and lifelong S2, off for S1",
     )
-    parser.add_argument(
-        "--one-way",
-        choices=["off", "aisles", "all"],
-        help="S3: 'aisles': the aisles between the shelf rows one way, alternating east and "
-        "west; 'all': the passages between shelf blocks too, alternating down and up (default: "
-        f"{scenarios.S3_ONE_WAY})",
-    )
     args = parser.parse_args()
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
@@ -68,9 +61,6 @@ def main() -> None:
                 switch_push=switch_push,
             )
         else:
-            extra: dict[str, Any] = {}
-            if name == "S3" and args.one_way:
-                extra["one_way"] = args.one_way
             runner = scenarios.s1 if name == "S1" else scenarios.s3
             bound: tuple[int, float] | None = (
                 scenarios.QUICK_SEARCH if name == "S1" else scenarios.S3_QUICK_SEARCH
@@ -89,7 +79,6 @@ def main() -> None:
                 retime_slack=args.retime_slack,
                 retime_growth=args.retime_growth,
                 switch_push=switch_push,
-                **extra,
             )
         figures["quick"] = args.quick
         print(f"== {name}")

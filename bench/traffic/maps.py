@@ -4,18 +4,13 @@
 border wall, 10 × 20 shelf blocks of 10×2 cells with 1-cell aisles between them, 25-cell open
 margins left and right) instead of storing it (MovingAI maps carry no open licence). Workstations
 sit in the margins on a lattice (odd row, odd column) so a vehicle standing at one never blocks
-a lane; pick locations are the aisle cells next to a shelf. With `one_way_aisles` the aisles
-between the shelf rows are driven one way, alternating east and west from row to row (as real
-warehouses do with narrow aisles): no two vehicles meet head-on in an aisle; the short passages
-between shelf blocks stay two-way unless `one_way_passages` (alternating down and up from block
-column to block column: a grid of one-way streets); the open margins stay two-way.
+a lane; pick locations are the aisle cells next to a shelf.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 LORR = Path(__file__).resolve().parents[3] / "shared" / "bench" / "lorr2023"
@@ -30,11 +25,6 @@ class GridMap:
     free: frozenset[tuple[int, int]]
     picks: tuple[tuple[int, int], ...] = ()
     stations: tuple[tuple[int, int], ...] = ()
-    # cells driven one way: cell -> the only (drow, dcol) directions allowed out of it
-    # (`Layout.grid(one_way=...)`); None: every free neighbour both ways
-    one_way: Mapping[tuple[int, int], tuple[tuple[int, int], ...]] | None = field(
-        default=None, compare=False
-    )
 
     def cell(self, index: int) -> tuple[int, int]:
         """LoRR cell index (row * width + col) as (row, col)."""
@@ -50,17 +40,10 @@ def warehouse(
     aisle: int = 1,
     margin: int = 25,
     station_cols: int = 2,
-    one_way_aisles: bool = False,
-    one_way_passages: bool = False,
 ) -> GridMap:
     """A MovingAI-pattern warehouse (defaults: warehouse-10-20-10-2-1, 161×63, 5,699 free).
 
     `station_cols` lattice columns of workstations per margin, next to the outer walls.
-    `one_way_aisles`: the aisle rows between the margins are one way, the first (top) one
-    eastwards, the next westwards and so on; from an aisle cell a vehicle may also turn into
-    the passage above or below it. `one_way_passages` (with `one_way_aisles`): the passages
-    between shelf blocks are one way too, the first (left) column of them downwards, the next
-    upwards and so on, and an aisle cell turns only into a passage that leads away from it.
     """
     height = 2 + aisle + block_rows * (block_h + aisle)
     width = 2 + 2 * margin + block_cols * (block_len + aisle) - aisle
@@ -87,48 +70,7 @@ def warehouse(
     stations = tuple(
         sorted((r, c) for r in range(1, height - 1, 2) for c in columns if (r, c) in free)
     )
-    if one_way_passages and not one_way_aisles:
-        raise ValueError("one_way_passages needs one_way_aisles")
-    one_way = None
-    if one_way_aisles:
-        span = (1 + margin, width - 2 - margin, block_len + aisle)
-        one_way = _one_way(free, span, block_h + aisle, aisle, passages=one_way_passages)
-    return GridMap(height, width, free, picks, stations, one_way)
-
-
-def _one_way(
-    free: frozenset[tuple[int, int]],
-    span: tuple[int, int, int],
-    pitch: int,
-    aisle: int,
-    *,
-    passages: bool,
-) -> dict[tuple[int, int], tuple[tuple[int, int], ...]]:
-    """Allowed moves out of the cells between the margins (see `warehouse`): `span` is the
-    shelf columns' first, last and block pitch, `pitch` the shelf rows' pitch."""
-    first, last, block_pitch = span
-    out: dict[tuple[int, int], tuple[tuple[int, int], ...]] = {}
-
-    def passage_way(c: int) -> int:  # +1: the passages of column c lead down, -1: up
-        return 1 if (c - first) // block_pitch % 2 == 0 else -1
-
-    for r, c in free:
-        if not first <= c <= last:
-            continue  # a margin cell
-        if (r - 1) % pitch >= aisle:  # a passage between blocks
-            if passages:
-                out[(r, c)] = ((passage_way(c), 0),)
-            continue
-        lane = (r - 1) // pitch * aisle + (r - 1) % pitch
-        ahead = (0, 1) if lane % 2 == 0 else (0, -1)
-        out[(r, c)] = (ahead,) + tuple(
-            (dr, 0)
-            for dr in (-1, 1)
-            if (r + dr, c) in free
-            and (r + dr - 1) % pitch >= aisle
-            and (not passages or dr == passage_way(c))
-        )
-    return out
+    return GridMap(height, width, free, picks, stations)
 
 
 def movingai(path: Path) -> GridMap:

@@ -48,9 +48,6 @@ REASSIGN_AFTER = 3
 # Eleventh round: S3's first 360 s rho_work 0.574 -> 0.629; I-03 1,455 -> 1,484 errands
 # (mean of three first-wave orders); S1 neither better nor worse, so off there
 SWITCH_PUSH = 10.0
-# S3: "aisles" (the aisles between shelf rows one way, alternating), "all" (the passages
-# between shelf blocks too) or "off" (`maps.warehouse`; the command line's default)
-S3_ONE_WAY = "off"
 
 
 def warehouse_scenario(
@@ -73,7 +70,7 @@ def warehouse_scenario(
     at its drop and the next planned from there (`traffic.aside`).
     """
     began = time.perf_counter()
-    layout = Layout.grid(grid.free, parking=grid.stations, one_way=grid.one_way)
+    layout = Layout.grid(grid.free, parking=grid.stations)
     rng = random.Random(seed)
     starts = [(node_id(c), 0.0) for c in rng.sample(list(grid.stations), vehicles)]
     manager = fleet_manager(
@@ -166,26 +163,12 @@ def s3(
     retime_slack: float = 2.0,
     retime_growth: float = 0.0,
     switch_push: float | None = None,
-    one_way: str = S3_ONE_WAY,
 ) -> dict[str, Any]:
-    """S3: 1,000 vehicles on a 500×140 warehouse (targets: rho >= 0.7, plan p95 <= 150 ms).
-
-    `one_way`: "aisles" makes the aisles between the shelf rows one way (alternating), "all"
-    the passages between shelf blocks too (`maps.warehouse`), "off" neither.
-    """
-    if one_way not in ("off", "aisles", "all"):
-        raise ValueError(f"one_way must be off, aisles or all, not {one_way!r}")
-    grid = warehouse(
-        block_cols=36,
-        block_rows=45,
-        margin=51,
-        station_cols=8,
-        one_way_aisles=one_way != "off",
-        one_way_passages=one_way == "all",
-    )
+    """S3: 1,000 vehicles on a 500×140 warehouse (targets: rho >= 0.7, plan p95 <= 150 ms)."""
+    grid = warehouse(block_cols=36, block_rows=45, margin=51, station_cols=8)
     vehicles = 150 if quick else 1000
     hours = hours or (0.1 if quick else 0.25)
-    out = warehouse_scenario(
+    return warehouse_scenario(
         "S3",
         grid,
         vehicles,
@@ -198,8 +181,6 @@ def s3(
         retime_growth=retime_growth,
         switch_push=switch_push,
     )
-    out["one_way"] = one_way
-    return out
 
 
 class LorrTasks:
