@@ -209,10 +209,8 @@ class ControlMetrics:
                 counters["traffic_replans_unchanged"] = sum(m.replans_unchanged for m in managers)
                 # progress beyond the base, vehicles that cannot be placed, ... (logged too);
                 # an order start that found no plan now (it is tried again) is counted apart
-                problems = controller.traffic.problems.items()
-                no_plan = sum(n for p, n in problems if p.startswith("no plan"))
-                counters["traffic_no_plan"] = no_plan
-                counters["traffic_problems"] = sum(n for _, n in problems) - no_plan
+                problems, no_plan = controller.traffic.problem_counts()
+                counters["traffic_problems"], counters["traffic_no_plan"] = problems, no_plan
                 safety = controller.traffic.safety(time.monotonic())
             else:
                 safety = {}

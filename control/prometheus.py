@@ -112,37 +112,34 @@ class FleetCollector:
             "1 when control's MQTT client is connected.",
             int(bool(snapshot.get("broker_connected"))),
         )
-        received = CounterMetricFamily(
+        yield _labelled(
+            CounterMetricFamily,
             "fleet_control_messages_received",
             "MQTT messages control received, by topic kind.",
-            labels=["topic"],
+            "topic",
+            snapshot.get("messages_by_topic", {}),
         )
-        for topic, count in sorted(snapshot.get("messages_by_topic", {}).items()):
-            received.add_metric([topic], count)
-        yield received
         counters = snapshot.get("counters", {})
         yield CounterMetricFamily(
             "fleet_control_decode_errors",
             "Messages dropped because they did not decode.",
             counters.get("decode_errors", 0),
         )
-        events = CounterMetricFamily(
+        yield _labelled(
+            CounterMetricFamily,
             "fleet_control_events",
             "control's protocol counters (rejections, duplicates, sent messages, …).",
-            labels=["event"],
+            "event",
+            counters,
         )
-        for name, count in sorted(counters.items()):
-            events.add_metric([name], count)
-        yield events
-        sessions = CounterMetricFamily(
+        yield _labelled(
+            CounterMetricFamily,
             "fleet_control_vehicle_protocol_events",
             "Per-vehicle protocol counters summed over the fleet (gaps = header ids skipped: "
             "messages lost between vehicle and control).",
-            labels=["event"],
+            "event",
+            snapshot.get("vehicle_counters", {}),
         )
-        for name, count in sorted(snapshot.get("vehicle_counters", {}).items()):
-            sessions.add_metric([name], count)
-        yield sessions
         yield from (
             _histogram(name, help_text, snapshot[key])
             for name, help_text, key in (
@@ -181,29 +178,43 @@ class FleetCollector:
             )
             if snapshot.get(key)
         )
-        links = GaugeMetricFamily(
-            "fleet_control_vehicles", "Vehicles in control's live model by link.", labels=["link"]
+        yield _labelled(
+            GaugeMetricFamily,
+            "fleet_control_vehicles",
+            "Vehicles in control's live model by link.",
+            "link",
+            snapshot.get("vehicles_by_link", {}),
         )
-        for link, count in sorted(snapshot.get("vehicles_by_link", {}).items()):
-            links.add_metric([link], count)
-        yield links
         yield GaugeMetricFamily(
             "fleet_control_vehicles_executing",
             "Vehicles control is driving an order with.",
             snapshot.get("vehicles_executing", 0),
         )
-        safety = GaugeMetricFamily(
+        yield _labelled(
+            GaugeMetricFamily,
             "fleet_control_traffic_safety",
             "Traffic's safety net now: wait-for cycles (deadlocks) and stalled vehicles (no "
             "progress along a whole wait-for chain for 60 s). Both must stay 0: alert on any.",
-            labels=["check"],
+            "check",
+            snapshot.get("traffic_safety", {}),
         )
-        for check, count in sorted(snapshot.get("traffic_safety", {}).items()):
-            safety.add_metric([check], count)
-        yield safety
         yield CounterMetricFamily(
             "fleet_control_cpu_seconds", "CPU time of the control process.", snapshot["cpu_seconds"]
         )
+
+
+def _labelled(
+    family: type[CounterMetricFamily] | type[GaugeMetricFamily],
+    name: str,
+    help_text: str,
+    label: str,
+    counts: dict[str, Any],
+) -> CounterMetricFamily | GaugeMetricFamily:
+    """A family with one sample per entry of `counts` (label value -> count), sorted."""
+    metric = family(name, help_text, labels=[label])
+    for value, count in sorted(counts.items()):
+        metric.add_metric([value], count)
+    return metric
 
 
 def _histogram(name: str, help_text: str, data: dict[str, Any]) -> HistogramMetricFamily:

@@ -43,6 +43,7 @@ from traffic import Goal, NoPlanError, Plan, ReleasePolicy, TrafficManager
 logger = logging.getLogger(__name__)
 
 UNPLANNED = "driving an order traffic did not plan"
+NO_PLAN = "no plan"  # how problems that are only congestion begin (`problem_counts`)
 # A search over 1,000 expansions is repeated at weight 2 (at most twice the earliest arrival):
 # it bounds the time a plan holds the controller's lock in congestion; in the S1 benchmark it
 # cut planning p95 by half with throughput unchanged (docs/TRAFFIC_RESULTS.md, third round).
@@ -115,6 +116,13 @@ class TrafficLink(OrderWindows, TrafficViews):
                 if self.searches.lock is not None:
                     self.managers[map_id].unlocked = self.searches.let_go_if_allowed
                 self._indexes[map_id] = index
+
+    def problem_counts(self) -> tuple[int, int]:
+        """(problems, order starts or re-adoptions that found no plan now and are tried
+        again): the first are defects or bad input (progress beyond the base, a vehicle that
+        cannot be placed, a failed tick), the second congestion."""
+        no_plan = sum(n for p, n in self.problems.items() if p.startswith(NO_PLAN))
+        return sum(self.problems.values()) - no_plan, no_plan
 
     def _count(self, problem: str) -> None:
         self.problems[problem] = self.problems.get(problem, 0) + 1
@@ -259,7 +267,7 @@ class TrafficLink(OrderWindows, TrafficViews):
             try:
                 manager.plan(me, [Goal(g, self.dwell) for g in goals], now)
             except NoPlanError as exc:
-                self._count(f"no plan to re-adopt {state.order_id}: {exc}")
+                self._count(f"{NO_PLAN} to re-adopt {state.order_id}: {exc}")
                 return []
         tracked.order_id, tracked.lost, tracked.offset = state.order_id, None, decision
         v = manager.vehicle(me)
@@ -299,7 +307,7 @@ class TrafficLink(OrderWindows, TrafficViews):
             with self.searches.searches_let_go():
                 plan = manager.plan(name(vehicle), [Goal(g, self.dwell) for g in goals], now)
         except (NoPlanError, KeyError) as exc:
-            self._count(f"no plan for {order_id}: {exc!r}")
+            self._count(f"{NO_PLAN} for {order_id}: {exc!r}")
             if isinstance(exc, NoPlanError) and self.parking is not None:
                 self._clear_way(self.parking, tracked, order_id, goals, now)
             return None
