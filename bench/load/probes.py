@@ -22,6 +22,7 @@ import random
 import time
 import urllib.request
 import uuid
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +31,7 @@ import paho.mqtt.client as mqtt
 from paho.mqtt.enums import CallbackAPIVersion
 
 CONTROL_TOPICS = (("state", 0), ("connection", 1), ("factsheet", 0), ("visualization", 0))
+ZONE = 3  # aisle nodes (18 m) around a vehicle's home where a zone order picks and drops
 
 
 def percentile(samples: list[float], q: float) -> float | None:
@@ -196,17 +198,55 @@ def _causal(
     }
 
 
+WORKLOADS = {
+    "zone": "each order names its vehicle round-robin: pick and drop at two shelves within "
+    f"{ZONE} aisle nodes of its home, then an action at home",
+    "cross": "each order names its vehicle round-robin: pick on the top row, drop on the bottom "
+    "row, then an action at home (every order crosses the grid)",
+    "any": "pick on the top row, drop on the bottom row, for whichever vehicle dispatch finds "
+    "(it then stands on the drop station until parked)",
+}
+
+
+def _workload(
+    workload: str, layout: dict[str, Any], rng: random.Random
+) -> Callable[[str], list[dict[str, Any]]]:
+    """The pick and drop steps of the next order, given the home station of its vehicle."""
+    by_kind: dict[str, list[str]] = {}
+    for station in layout["stations"]:
+        by_kind.setdefault(station["kind"], []).append(station["id"])
+    if workload != "zone":
+        picks, drops = by_kind["PICK"], by_kind["DROP"]
+        return lambda _home: [
+            {"station": rng.choice(picks), "operation": "PICK"},
+            {"station": rng.choice(drops), "operation": "DROP"},
+        ]
+    shelves = set(by_kind["HANDOVER"])
+
+    def near(home: str) -> list[dict[str, Any]]:
+        # PARK-ccc-rrr: the shelves SHELF-ccc-rrr within ZONE columns and rows of it
+        _, column, row = home.split("-")
+        around = [
+            f"SHELF-{c:03d}-{r:03d}"
+            for c in range(int(column) - ZONE, int(column) + ZONE + 1)
+            for r in range(int(row) - ZONE, int(row) + ZONE + 1)
+        ]
+        pick, drop = rng.sample([s for s in around if s in shelves], 2)
+        return [
+            {"station": pick, "operation": "PICK"},
+            {"station": drop, "operation": "DROP"},
+        ]
+
+    return near
+
+
 def api(args: argparse.Namespace) -> dict[str, Any]:
     """POST transport orders at `rate`/s; time POST → the order's first message on MQTT.
 
-    With `intended` each order names its vehicle round-robin: pick → drop → an action at the
-    vehicle's home (so no vehicle stays on a station); otherwise it is pick → drop for
-    whichever vehicle dispatch finds, which then stands on the drop station until parked."""
+    The `workload` says what the orders are (`WORKLOADS`)."""
     layout = json.loads(Path(args.layout).read_text())
     fleet = json.loads(Path(args.fleet).read_text())  # [serial number, home park station]
-    picks = [s["id"] for s in layout["stations"] if s["kind"] == "PICK"]
-    drops = [s["id"] for s in layout["stations"] if s["kind"] == "DROP"]
-    rng = random.Random(7)
+    next_steps = _workload(args.workload, layout, random.Random(7))
     host, port = args.broker.split(":")
     client = _client("api", host, int(port))
     # Wall-clock times (s), comparable with the database's created/assigned times.
@@ -230,14 +270,11 @@ def api(args: argparse.Namespace) -> dict[str, Any]:
     n = 0
     while (due := t0 + n / args.rate) < end:
         time.sleep(max(0.0, due - time.perf_counter()))
-        steps = [
-            {"station": rng.choice(picks), "operation": "PICK"},
-            {"station": rng.choice(drops), "operation": "DROP"},
-        ]
+        serial, home = fleet[n % len(fleet)]
+        steps = next_steps(home)
         body: dict[str, Any] = {"steps": steps, "external_ref": f"LOAD-{n}"}
-        if args.intended:
+        if args.workload != "any":
             # each order names its vehicle in turn and sends it back home at the end
-            serial, home = fleet[n % len(fleet)]
             steps.append({"station": home, "operation": "ACTION", "action_type": "stopCharging"})
             body["intended_vehicle"] = serial
         request = urllib.request.Request(
@@ -346,9 +383,7 @@ def main() -> None:
     parser.add_argument("--layout", default="")
     parser.add_argument("--rate", type=float, default=1.0)
     parser.add_argument("--fleet", default="", help="JSON [[serial, home station], ...]")
-    parser.add_argument(
-        "--intended", action="store_true", help="orders name their vehicle round-robin"
-    )
+    parser.add_argument("--workload", choices=tuple(WORKLOADS), default="zone")
     parser.add_argument("--causes", default="", help="control's CONTROL_CAUSE_LOG (raw)")
     parser.add_argument("--grace", type=float, default=5.0, help="wait for the last orders")
     args = parser.parse_args()

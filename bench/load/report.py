@@ -143,7 +143,7 @@ def report(
             "state_interval": args.state_interval,
             "visualization_hz": args.visualization_hz,
             "order_rate": args.order_rate,
-            "orders_name_their_vehicle": args.intended,
+            "workload": args.workload,
             "park_after_s": args.park_after,
             "traffic": args.traffic,
             "max_queued_messages": args.max_queued,

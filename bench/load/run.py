@@ -31,6 +31,7 @@ import psycopg
 import redis
 
 from bench import results
+from bench.load.probes import WORKLOADS
 from bench.load.processes import (
     ROOT,
     Child,
@@ -118,7 +119,12 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     )
     subprocess.run(python("manage.py", "migrate", "-v", "0"), cwd=ROOT, env=env, check=True)
     setup = subprocess.run(
-        python("-m", "bench.load.setup", "--vehicles", str(args.vehicles), "--out", str(work)),
+        python(
+            "-m",
+            "bench.load.setup",
+            *("--vehicles", str(args.vehicles), "--out", str(work)),
+            *(["--shelves"] if args.workload == "zone" else []),
+        ),
         cwd=ROOT,
         env=env,
         check=True,
@@ -239,7 +245,8 @@ def measure(
                 str(work / "vehicles.json"),
                 "--rate",
                 str(args.order_rate),
-                *(["--intended"] if args.intended else []),
+                "--workload",
+                args.workload,
             ),
             os.environ.copy(),
             work,
@@ -333,11 +340,10 @@ def main() -> None:
     add("--visualization-hz", type=float, default=1.0)
     add("--order-rate", type=float, default=1.0, help="transport orders posted per second")
     add(
-        "--any-vehicle",
-        dest="intended",
-        action="store_false",
-        help="orders are pick then drop for whichever vehicle dispatch finds (default: each "
-        "names its vehicle round-robin and ends at its home; docs/LOAD.md, tenth round)",
+        "--workload",
+        choices=tuple(WORKLOADS),
+        default="zone",
+        help="; ".join(f"{name}: {text}" for name, text in WORKLOADS.items()),
     )
     add("--speed", type=float, default=1.0)
     add("--time-scale", type=float, default=4.0, help="simulated time runs this much faster")

@@ -1,10 +1,11 @@
 """Prepares the benchmark database (run as a process with Django configured).
 
 A warehouse grid with a park spur at every aisle node (each vehicle's home, off the aisles),
-pick stations along the top row and drop stations along the bottom row; a logged-in session
-for the websocket client and an ERP token for the API client.
+pick stations along the top row and drop stations along the bottom row, and with `--shelves`
+a handover spur (a shelf, pick and drop) at every aisle node too; a logged-in session for the
+websocket client and an ERP token for the API client.
 
-    DATABASE_URL=... python -m bench.load.setup --vehicles 1000 --out DIR
+    DATABASE_URL=... python -m bench.load.setup --vehicles 1000 --out DIR [--shelves]
 """
 
 import argparse
@@ -19,8 +20,11 @@ SPACING = 6.0  # m between aisle nodes: a parked vehicle is 2 m clear of both ai
 SPUR = 2.0
 
 
-def layout_spec(vehicles: int) -> dict[str, Any]:
-    """Layout data for `maps.services.create_layout` with at least `vehicles` park spurs."""
+def layout_spec(vehicles: int, shelves: bool = False) -> dict[str, Any]:
+    """Layout data for `maps.services.create_layout` with at least `vehicles` park spurs.
+
+    Park spurs leave an aisle node up and right, shelves (`shelves`) up and left: 2 m from
+    the next column's park spur, clear of a 1.2 × 0.8 m vehicle with its load."""
     columns = max(4, math.ceil(math.sqrt(vehicles * 1.6)))
     rows = max(3, math.ceil(vehicles / columns))
     nodes: list[dict[str, Any]] = []
@@ -50,6 +54,9 @@ def layout_spec(vehicles: int) -> dict[str, Any]:
         spur("DROP", f"DROP-{c:03d}", f"A{c}.0", x, -SPUR)
         for r in range(rows):
             spur("PARK", f"PARK-{c:03d}-{r:03d}", f"A{c}.{r}", x + SPUR, r * SPACING + SPUR)
+            if shelves:
+                y = r * SPACING + SPUR
+                spur("HANDOVER", f"SHELF-{c:03d}-{r:03d}", f"A{c}.{r}", x - SPUR, y)
     return {
         "mapId": "load",
         "name": "Load benchmark",
@@ -59,7 +66,7 @@ def layout_spec(vehicles: int) -> dict[str, Any]:
     }
 
 
-def prepare(vehicles: int, out: Path) -> dict[str, Any]:
+def prepare(vehicles: int, out: Path, shelves: bool = False) -> dict[str, Any]:
     """Create layout, user session and ERP token; write the simulator's layout file."""
     from django.contrib.auth import (
         BACKEND_SESSION_KEY,
@@ -73,7 +80,7 @@ def prepare(vehicles: int, out: Path) -> dict[str, Any]:
     from maps.services import create_layout
     from orders import services
 
-    layout = create_layout(spec=layout_spec(vehicles), replace=True)
+    layout = create_layout(spec=layout_spec(vehicles, shelves), replace=True)
     data = layout_as_dict(map=layout)
     (out / "layout.json").write_text(json.dumps(data))
     user = get_user_model().objects.create_superuser("loadbench", "", None)
@@ -100,12 +107,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--vehicles", type=int, required=True)
     parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--shelves", action="store_true", help="a shelf at every aisle node")
     args = parser.parse_args()
     os.environ.setdefault("DJANGO_SETTINGS_MODULE", "fleet.settings")
     import django
 
     django.setup()
-    print(json.dumps(prepare(args.vehicles, args.out)))
+    print(json.dumps(prepare(args.vehicles, args.out, args.shelves)))
 
 
 if __name__ == "__main__":
