@@ -103,9 +103,23 @@ def create_database(admin_url: str, name: str) -> None:
         connection.execute(f'CREATE DATABASE "{name}"')
 
 
-def broker_dropped(port: int, timeout: float = 15.0) -> int | None:
+def broker_dropped(port: int, timeout: float = 15.0, attempts: int = 3) -> int | None:
     """Mosquitto's count of messages it dropped (queue limits) since it started, from its
-    retained `$SYS/broker/publish/messages/dropped` (None if it did not say in time)."""
+    retained `$SYS/broker/publish/messages/dropped` (None if it did not say in `attempts`
+    tries: a busy broker once let the only try time out, and the run had no figure)."""
+    for attempt in range(attempts):
+        try:
+            dropped = _read_broker_dropped(port, timeout, attempt)
+        except OSError as exc:
+            print(f"$SYS read failed: {exc}", flush=True)
+            continue
+        if dropped is not None:
+            return dropped
+        print(f"$SYS dropped count not received in {timeout:.0f} s", flush=True)
+    return None
+
+
+def _read_broker_dropped(port: int, timeout: float, attempt: int) -> int | None:
     got: dict[str, int] = {}
     arrived = threading.Event()
 
@@ -114,7 +128,9 @@ def broker_dropped(port: int, timeout: float = 15.0) -> int | None:
             got["dropped"] = int(message.payload)
             arrived.set()
 
-    client = mqtt.Client(CallbackAPIVersion.VERSION2, client_id=f"loadbench-sys-{os.getpid()}")
+    client = mqtt.Client(
+        CallbackAPIVersion.VERSION2, client_id=f"loadbench-sys-{os.getpid()}-{attempt}"
+    )
     client.on_message = on_message
     client.connect("127.0.0.1", port, 30)
     client.subscribe("$SYS/broker/publish/messages/dropped", 0)
