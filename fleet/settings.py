@@ -245,6 +245,8 @@ CONTROL_HEALTH_PORT = env.int("CONTROL_HEALTH_PORT", default=8081)
 # control is one long-lived process with two database threads (flush, floor observer): it keeps
 # its connections (seconds) instead of opening one per flush, as DB_CONN_MAX_AGE=0 does.
 CONTROL_DB_CONN_MAX_AGE = env.int("CONTROL_DB_CONN_MAX_AGE", default=300)
+# Celery pool processes run one task at a time: each keeps its connection (fleet/celery.py).
+WORKER_DB_CONN_MAX_AGE = env.int("WORKER_DB_CONN_MAX_AGE", default=300)
 # For the load benchmark (bench/load): a file where control writes, per order update it
 # publishes while handling a state message, which state that was (control/metrics.py CauseLog).
 CONTROL_CAUSE_LOG = env.str("CONTROL_CAUSE_LOG", default="")
