@@ -203,9 +203,13 @@ class TransportOrderListCreateApi(generics.ListAPIView[TransportOrder]):
         fields = dict(data.validated_data)
         map_id = fields.pop("map", None)
         if "steps" in fields:
+            named = {
+                f"steps[{i}].station": step["station"] for i, step in enumerate(fields["steps"])
+            }
+            stations = _stations(named, map_id)
             fields["steps"] = [
                 services.StepSpec(
-                    station=_station(f"steps[{i}].station", step["station"], map_id),
+                    station=stations[f"steps[{i}].station"],
                     operation=step["operation"],
                     action_type=step.get("action_type", ""),
                     parameters=step.get("parameters", {}),
@@ -213,8 +217,7 @@ class TransportOrderListCreateApi(generics.ListAPIView[TransportOrder]):
                 for i, step in enumerate(fields["steps"])
             ]
         else:
-            fields["source"] = _station("source", fields["source"], map_id)
-            fields["destination"] = _station("destination", fields["destination"], map_id)
+            fields.update(_stations({k: fields[k] for k in ("source", "destination")}, map_id))
         if "intended_vehicle" in fields:
             fields["intended_vehicle"] = _vehicle(fields["intended_vehicle"])
         if "vehicle_type" in fields:
@@ -223,18 +226,28 @@ class TransportOrderListCreateApi(generics.ListAPIView[TransportOrder]):
         return Response(TransportOrderSerializer(order).data, status=status.HTTP_201_CREATED)
 
 
-def _station(field: str, station_id: str, map_id: str | None) -> Station:
-    stations = Station.objects.filter(station_id=station_id).select_related("map", "node")
+def _stations(named: dict[str, str], map_id: str | None) -> dict[str, Station]:
+    """The station each request field names (field → station id), read in one query: an
+    unknown id, or one on several maps without `map`, is a 400 naming the field."""
+    stations = Station.objects.filter(station_id__in=set(named.values())).select_related(
+        "map", "node"
+    )
     if map_id is not None:
         stations = stations.filter(map__map_id=map_id)
-    found = list(stations[:2])
-    if not found:
-        raise serializers.ValidationError({field: [f"No station {station_id!r}."]})
-    if len(found) > 1:
-        raise serializers.ValidationError(
-            {field: [f"{station_id!r} is on several maps: give map."]}
-        )
-    return found[0]
+    by_id: dict[str, list[Station]] = {}
+    for station in stations:
+        by_id.setdefault(station.station_id, []).append(station)
+    found: dict[str, Station] = {}
+    for field, station_id in named.items():
+        matches = by_id.get(station_id, [])
+        if not matches:
+            raise serializers.ValidationError({field: [f"No station {station_id!r}."]})
+        if len(matches) > 1:
+            raise serializers.ValidationError(
+                {field: [f"{station_id!r} is on several maps: give map."]}
+            )
+        found[field] = matches[0]
+    return found
 
 
 class TransportOrderDetailApi(generics.RetrieveAPIView[TransportOrder]):

@@ -240,3 +240,27 @@ def test_browser_sessions_still_work(db, demo_map) -> None:
     browser.force_login(staff)  # a session cookie, as a browser has after the login form
 
     assert browser.get("/api/v1/orders/").status_code == 200
+
+
+def test_steps_name_the_field_of_an_unknown_or_ambiguous_station(api, demo_map) -> None:
+    from maps.demo import warehouse_layout
+    from maps.services import create_layout
+
+    create_layout(spec=warehouse_layout(columns=4, rows=3, map_id="hall-2"))  # same station ids
+    steps = [
+        {"station": "PICK-1", "operation": "PICK"},
+        {"station": "NOPE", "operation": "DROP"},
+    ]
+
+    unknown = api.post("/api/v1/orders/", {"steps": steps, "map": "demo"}, format="json")
+    ambiguous = api.post("/api/v1/orders/", {"steps": steps[:1] * 2}, format="json")
+    steps[1]["station"] = "DROP-1"
+    chosen = api.post("/api/v1/orders/", {"steps": steps, "map": "hall-2"}, format="json")
+
+    assert unknown.status_code == 400
+    assert unknown.json() == {"steps[1].station": ["No station 'NOPE'."]}
+    assert ambiguous.status_code == 400
+    assert ambiguous.json() == {"steps[0].station": ["'PICK-1' is on several maps: give map."]}
+    assert chosen.status_code == 201, chosen.content
+    order = TransportOrder.objects.get()
+    assert {s.station.map.map_id for s in order.steps.all()} == {"hall-2"}
