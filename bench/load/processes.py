@@ -103,44 +103,41 @@ def create_database(admin_url: str, name: str) -> None:
         connection.execute(f'CREATE DATABASE "{name}"')
 
 
-def broker_dropped(port: int, timeout: float = 15.0, attempts: int = 3) -> int | None:
-    """Mosquitto's count of messages it dropped (queue limits) since it started, from its
-    retained `$SYS/broker/publish/messages/dropped` (None if it did not say in `attempts`
-    tries: a busy broker once let the only try time out, and the run had no figure)."""
-    for attempt in range(attempts):
-        try:
-            dropped = _read_broker_dropped(port, timeout, attempt)
-        except OSError as exc:
-            print(f"$SYS read failed: {exc}", flush=True)
-            continue
-        if dropped is not None:
-            return dropped
-        print(f"$SYS dropped count not received in {timeout:.0f} s", flush=True)
-    return None
+class BrokerDrops:
+    """Mosquitto's count of messages it dropped (queue limits) since it started, watched from
+    before the window to its end on `$SYS/broker/publish/messages/dropped`.
 
+    Mosquitto publishes that value retained but only when it changes, with a 60 s expiry: a
+    client that subscribes at the end of a window without drops gets nothing (the tenth and
+    eleventh rounds had `broker_dropped: null`). Subscribed from the start, the watcher has the
+    retained value at once and every change after it."""
 
-def _read_broker_dropped(port: int, timeout: float, attempt: int) -> int | None:
-    got: dict[str, int] = {}
-    arrived = threading.Event()
+    TOPIC = "$SYS/broker/publish/messages/dropped"
 
-    def on_message(_c: mqtt.Client, _u: Any, message: mqtt.MQTTMessage) -> None:
+    def __init__(self, port: int) -> None:
+        self.value: int | None = None
+        self._arrived = threading.Event()
+        self._client = mqtt.Client(
+            CallbackAPIVersion.VERSION2, client_id=f"loadbench-sys-{os.getpid()}"
+        )
+        self._client.on_message = self._on_message
+        self._client.connect("127.0.0.1", port, 30)
+        self._client.subscribe(self.TOPIC, 0)
+        self._client.loop_start()
+
+    def _on_message(self, _c: mqtt.Client, _u: Any, message: mqtt.MQTTMessage) -> None:
         with contextlib.suppress(ValueError):
-            got["dropped"] = int(message.payload)
-            arrived.set()
+            self.value = int(message.payload)
+            self._arrived.set()
 
-    client = mqtt.Client(
-        CallbackAPIVersion.VERSION2, client_id=f"loadbench-sys-{os.getpid()}-{attempt}"
-    )
-    client.on_message = on_message
-    client.connect("127.0.0.1", port, 30)
-    client.subscribe("$SYS/broker/publish/messages/dropped", 0)
-    client.loop_start()
-    try:
-        arrived.wait(timeout)
-    finally:
-        client.disconnect()
-        client.loop_stop()
-    return got.get("dropped")
+    def read(self, timeout: float = 15.0) -> int | None:
+        """The latest count (None if Mosquitto has not said it within `timeout` of the start)."""
+        self._arrived.wait(timeout)
+        return self.value
+
+    def close(self) -> None:
+        self._client.disconnect()
+        self._client.loop_stop()
 
 
 def db_stats(url: str, name: str) -> dict[str, int]:

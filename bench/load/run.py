@@ -34,8 +34,8 @@ from bench import results
 from bench.load.probes import WORKLOADS
 from bench.load.processes import (
     ROOT,
+    BrokerDrops,
     Child,
-    broker_dropped,
     create_database,
     db_stats,
     free_ports,
@@ -270,8 +270,9 @@ def measure(
         ),
     ]
     rds = redis.Redis.from_url(args.redis)
+    drops = BrokerDrops(port)  # subscribed until the window ends (its docstring says why)
     time.sleep(max(0.0, start - time.time()))
-    before = sample(children, rds, db_url, args.database, port)
+    before = sample(children, rds, db_url, args.database, drops)
     if args.py_spy:  # where control's CPU goes, as collapsed stacks (flamegraph input)
         control = next(c for c in children if c.name == "control")
         argv = ["py-spy", "record", "-p", str(control.popen.pid), "-d", str(int(args.seconds))]
@@ -285,7 +286,8 @@ def measure(
             )
         )
     time.sleep(args.seconds)
-    after = sample(children, rds, db_url, args.database, port)
+    after = sample(children, rds, db_url, args.database, drops)
+    drops.close()
     for probe in probes:
         probe.popen.wait(timeout=args.seconds + 120)  # all end on their own
         probe.log.close()
@@ -313,11 +315,11 @@ def dropping_clients(log: Path) -> list[str]:
 
 
 def sample(
-    children: list[Child], rds: redis.Redis, db_url: str, database: str, port: int
+    children: list[Child], rds: redis.Redis, db_url: str, database: str, drops: BrokerDrops
 ) -> dict[str, Any]:
     raw = rds.get(SNAPSHOT_KEY)
     return {
-        "broker_dropped": broker_dropped(port),
+        "broker_dropped": drops.read(),
         "wall": time.monotonic(),
         "cpu": {child.name: child.cpu_seconds() for child in children},
         "cpu_kernel": {child.name: child.cpu_seconds(kernel_only=True) for child in children},

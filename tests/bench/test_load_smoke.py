@@ -57,4 +57,5 @@ def test_quick_load_run_measures_every_figure(tmp_path: Path) -> None:
     assert figures["browser"]["messages_per_s"] > 0
     assert figures["browser"]["closed_by_server"] == 0
     assert figures["db_rows_per_s"]["updated"] > 0
+    assert figures["broker_dropped"] is not None  # Mosquitto's count, watched over the window
     assert "exit codes" in run.stdout
