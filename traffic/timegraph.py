@@ -11,10 +11,10 @@ k-alternatives search can penalise transitions without rebuilding the graph.
 
 A distance table (seconds to one goal from every state) is a reverse Dijkstra over the whole
 graph. rustworkx called back into Python for every transition's weight: 17–35 ms a table on the
-load benchmark's layout (14,190 states, 53,590 transitions), and the API, dispatch and the step
-checks each build up to three tables for an order with new stops. scipy's csgraph runs it on a
-compressed sparse matrix of the reversed transitions without callbacks (about 2 ms), same
-distances.
+load benchmark's layout (14,190 states, 53,590 transitions), and the API's step check, dispatch's
+pricing and its routing each build up to three tables for an order with new stops. scipy's
+csgraph runs it on a sparse matrix of the reversed transitions without callbacks: 3–6 ms, the
+same distances (docs/LOAD.md, eleventh round).
 """
 
 from __future__ import annotations
