@@ -32,7 +32,7 @@ WINDOW_S = 2.0  # a page row may show any report of the last 2 s (control → Re
 POSITION_TOLERANCE_M = 0.01  # the page gets millimetres
 LIVE_DATA_FRESH_S = 2.0  # main.js LIVE_DATA_FRESH_MS
 CATCH_UP_AGAIN_S = 2.0  # main.js CATCH_UP_AGAIN_MS
-RECONNECT_MIN_S, RECONNECT_MAX_S = 1.0, 3.0  # main.js RECONNECT_MIN_MS / RECONNECT_MAX_MS
+RECONNECT_MIN_S, RECONNECT_MAX_S = 0.5, 1.0  # main.js RECONNECT_MIN_MS / RECONNECT_MAX_MS
 SIGNED_OUT = {4401, 4403}
 
 Report = tuple[float, float | None, float | None, str, str]  # (monotonic, x, y, node, order)

@@ -15,11 +15,12 @@ import { VehicleTable, renderOrders, setText } from "./tables.js";
 const TABLE_INTERVAL_MS = 1000;
 const ORDERS_MIN_INTERVAL_MS = 1000;
 const ORDERS_POLL_MS = 10000;
-const RECONNECT_MIN_MS = 1000;
-// At most 2 s between attempts: a page must be live again within 5 s of the server (or its
-// Redis) coming back (RELIABILITY.md §5), catch-up read included; at 30 s it could stay stale
-// for half a minute, and at 3 s a busy machine once took 5.15 s (the Redis-loss fault row).
-const RECONNECT_MAX_MS = 2000;
+const RECONNECT_MIN_MS = 500;
+// At most 1 s between attempts (1.25 s with jitter): a page must be live again within 5 s of
+// the server (or its Redis) coming back (RELIABILITY.md §5), catch-up read included; at 30 s
+// it could stay stale for half a minute, and a busy CI machine took 5.15 s with 3 s and
+// 5.24 s with 2 s (the Redis-loss fault row).
+const RECONNECT_MAX_MS = 1000;
 const LIVE_DATA_FRESH_MS = 2000; // database rows do not overwrite live rows younger than this
 const CATCH_UP_AGAIN_MS = 2000; // after a reconnect the database is read again this much later
 const ROUTE_STATUSES = new Set(["driving", "busy", "paused", "error"]);
@@ -273,7 +274,7 @@ function onSocketClose(event) {
     setConnection("signed-out", event.code === 4401 ? "signed out – reload to log in" : "no permission");
     return;
   }
-  // Exponential backoff with jitter: 1 s, 2 s, then every 3 s.
+  // Backoff with jitter: 0.5 s, then every 1 s.
   const delay = Math.min(RECONNECT_MAX_MS, RECONNECT_MIN_MS * 2 ** socketState.attempts);
   const jittered = delay * (0.75 + Math.random() * 0.5);
   socketState.attempts += 1;
