@@ -3,7 +3,7 @@ projected charge after a job, charger occupancy and battery history."""
 
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from django.db.models import QuerySet
@@ -88,30 +88,60 @@ def consumption_of(energy: VehicleEnergy | None) -> Consumption:
     return Consumption(per_metre=energy.drain_per_metre, per_hour=energy.drain_per_hour)
 
 
-def dispatch_holds(*, vehicles: Iterable[Vehicle]) -> dict[int, str]:
-    """Vehicles that must not get work now, with the reason: charging or driving to a charger,
-    queued for a charger because the battery is low, or below the working minimum."""
-    vehicles = list(vehicles)
+@dataclass
+class DispatchEnergy:
+    """The battery facts of a dispatch cycle's vehicles, read once for the cycle: the policies,
+    each vehicle's learned consumption and open charge session, and the charger nodes of each
+    map (read on first use). Holds and job refusals both need them; reading them per order cost
+    a dispatch cycle four queries (docs/LOAD.md, twelfth round)."""
+
+    book: PolicyBook
+    energy: dict[int, VehicleEnergy]
+    sessions: dict[int, ChargeSession]
+    chargers: dict[str, list[str]] = field(default_factory=dict)  # map id -> charger nodes
+
+    def charger_nodes(self, map_id: str) -> list[str]:
+        if map_id not in self.chargers:
+            self.chargers[map_id] = list(
+                Charger.objects.filter(is_active=True, station__map__map_id=map_id).values_list(
+                    "station__node__node_id", flat=True
+                )
+            )
+        return self.chargers[map_id]
+
+
+def read_dispatch_energy(*, vehicles: Iterable[Vehicle]) -> DispatchEnergy:
+    """The battery facts of `vehicles` for one dispatch cycle (three queries)."""
     ids = [v.pk for v in vehicles]
     sessions = {
         s.vehicle_id: s
         for s in ChargeSession.objects.filter(vehicle_id__in=ids, status__in=OPEN_SESSION_STATUSES)
     }
     energy = {e.vehicle_id: e for e in VehicleEnergy.objects.filter(vehicle_id__in=ids)}
-    book = get_policy_book()
+    return DispatchEnergy(get_policy_book(), energy, sessions)
+
+
+def dispatch_holds(
+    *, vehicles: Iterable[Vehicle], energy: DispatchEnergy | None = None
+) -> dict[int, str]:
+    """Vehicles that must not get work now, with the reason: charging or driving to a charger,
+    queued for a charger because the battery is low, or below the working minimum. `energy`:
+    the facts read for these vehicles (read here when not given)."""
+    vehicles = list(vehicles)
+    facts = energy if energy is not None else read_dispatch_energy(vehicles=vehicles)
     holds: dict[int, str] = {}
     for vehicle in vehicles:
-        session = sessions.get(vehicle.pk)
+        session = facts.sessions.get(vehicle.pk)
         if session is not None and session.status in {Status.ASSIGNED, Status.DRIVING}:
             holds[vehicle.pk] = "driving to a charger"
             continue
         if session is not None and session.status == Status.CHARGING:
             holds[vehicle.pk] = "charging"
             continue
-        learned = energy.get(vehicle.pk)
+        learned = facts.energy.get(vehicle.pk)
         per_hour = learned.drain_per_hour if learned else None
-        reason = book.for_vehicle(vehicle).job_refusal(vehicle.battery_charge, 0.0, per_hour)
-        if reason is not None:
+        levels = facts.book.for_vehicle(vehicle)
+        if levels.job_refusal(vehicle.battery_charge, 0.0, per_hour) is not None:
             holds[vehicle.pk] = "battery low"
         elif (
             session is not None
@@ -123,27 +153,29 @@ def dispatch_holds(*, vehicles: Iterable[Vehicle]) -> dict[int, str]:
 
 
 def job_refusal(
-    *, vehicle: Vehicle, route: list[str], graph: RoutingGraph, actions: int = 2
+    *,
+    vehicle: Vehicle,
+    route: list[str],
+    graph: RoutingGraph,
+    actions: int = 2,
+    energy: DispatchEnergy | None = None,
 ) -> str | None:
     """Why `vehicle` must not drive `route` with `actions` load actions, or None when it may:
     its charge after the route and the way on to the nearest charger, projected from its
-    learned consumption, must stay above the critical level of its policy."""
+    learned consumption, must stay above the critical level of its policy. `energy`: the
+    cycle's facts, which must include `vehicle` (read here when not given)."""
     if vehicle.battery_charge is None or not route:
         return None
-    metres = graph.path_length(route) + _to_nearest_charger(route[-1], vehicle.map_id, graph)
-    model = consumption_of(VehicleEnergy.objects.filter(vehicle=vehicle).first())
+    facts = energy if energy is not None else read_dispatch_energy(vehicles=[vehicle])
+    chargers = facts.charger_nodes(vehicle.map_id)
+    metres = graph.path_length(route) + _to_nearest_charger(route[-1], chargers, graph)
+    model = consumption_of(facts.energy.get(vehicle.pk))
     use = model.project(metres=metres, standing_seconds=actions * ACTION_SECONDS)
-    return (
-        get_policy_book()
-        .for_vehicle(vehicle)
-        .job_refusal(vehicle.battery_charge, use, model.per_hour)
-    )
+    levels = facts.book.for_vehicle(vehicle)
+    return levels.job_refusal(vehicle.battery_charge, use, model.per_hour)
 
 
-def _to_nearest_charger(node: str, map_id: str, graph: RoutingGraph) -> float:
-    chargers = Charger.objects.filter(is_active=True, station__map__map_id=map_id).values_list(
-        "station__node__node_id", flat=True
-    )
+def _to_nearest_charger(node: str, chargers: list[str], graph: RoutingGraph) -> float:
     distances = []
     for charger_node in chargers:
         try:

@@ -3,7 +3,7 @@
 import logging
 from typing import Any
 
-from django.db import InterfaceError, OperationalError
+from django.db import DataError, InterfaceError, OperationalError
 from rest_framework import status
 from rest_framework.response import Response
 from rest_framework.views import exception_handler
@@ -25,9 +25,17 @@ class InvalidRequestError(DomainError):
 
 def api_exception_handler(exc: Exception, context: dict[str, Any]) -> Response | None:
     """DRF's handler plus DomainError → 409/422 with the reason, so views need no try blocks,
-    and a database outage → 503 with Retry-After (the client retries; nothing was written)."""
+    a value the database cannot take (a NUL character in a query parameter, say) → 400, and a
+    database outage → 503 with Retry-After (the client retries; nothing was written)."""
     if isinstance(exc, DomainError):
         return Response({"detail": str(exc)}, status=exc.http_status)
+    if isinstance(exc, DataError):  # the request's transaction is rolled back: nothing written
+        logger.info("refused request data in %s: %s", context.get("view"), exc)
+        reason = str(exc).splitlines()[0][:200] if str(exc) else "invalid value"
+        return Response(
+            {"detail": f"The request holds a value the database cannot take: {reason}"},
+            status=status.HTTP_400_BAD_REQUEST,
+        )
     if isinstance(exc, OperationalError | InterfaceError):
         from fleet.middleware import RETRY_AFTER_SECONDS
 

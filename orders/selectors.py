@@ -22,18 +22,32 @@ from robots.models import Vehicle
 Status = TransportOrder.Status
 
 
-def list_pending_orders() -> QuerySet[TransportOrder]:
-    """Orders waiting for a vehicle, most urgent first (priority, deadline, age), with steps."""
-    return (
+def list_pending_orders() -> list[TransportOrder]:
+    """Orders waiting for a vehicle, most urgent first (priority, deadline, age), with steps.
+
+    Ranked here, not by the database: Django compiled the ORDER BY (an expression, for
+    deadlines last when missing on every database) against each of the hundred joined columns,
+    about a third of every dispatch cycle's SQL compiling under load (docs/LOAD.md, twelfth
+    round). The intended vehicle and vehicle type, named only in notes and rarely set, come
+    from their own reads, which run only when an order has one."""
+    orders = list(
         TransportOrder.objects.filter(status=Status.NEW, cancel_requested=False)
-        .select_related(
-            "source__node", "source__map", "destination__node", "intended_vehicle", "vehicle_type"
-        )
+        .select_related("source__node", "source__map", "destination__node")
         .prefetch_related(
-            Prefetch("steps", queryset=OrderStep.objects.select_related("station__node"))
+            "intended_vehicle",
+            "vehicle_type",
+            Prefetch("steps", queryset=OrderStep.objects.select_related("station__node")),
         )
-        .order_by("-priority", F("deadline").asc(nulls_last=True), "created_at", "pk")
+        .order_by()  # not even the model's default: ranked below
     )
+    orders.sort(key=_urgency)
+    return orders
+
+
+def _urgency(order: TransportOrder) -> tuple[Any, ...]:
+    """Sort key: higher priority, then the earlier deadline (none last), then the older."""
+    deadline = (0, order.deadline) if order.deadline is not None else (1,)
+    return (-order.priority, deadline, order.created_at, order.pk)
 
 
 @dataclass
@@ -79,11 +93,15 @@ def get_sequence_gate(*, orders: list[TransportOrder]) -> SequenceGate:
     return gate
 
 
-def get_vehicle_types(*, vehicles: list[Vehicle]) -> dict[int, VehicleType]:
+def get_vehicle_types(
+    *, vehicles: list[Vehicle], types: list[VehicleType] | None = None
+) -> dict[int, VehicleType]:
     """The layout vehicle type of each vehicle whose factsheet names a known one: the type id
     `manufacturer.seriesName` (LIF's convention) or `seriesName`, or a type with that
-    manufacturer and series name. Vehicles of unknown type are left out."""
-    types = list(VehicleType.objects.all())
+    manufacturer and series name. Vehicles of unknown type are left out. `types`: every
+    vehicle type, when already read."""
+    if types is None:
+        types = list(VehicleType.objects.all())
     by_id = {t.type_id: t for t in types}
     by_series = {(t.manufacturer, t.series_name): t for t in types if t.series_name}
     found: dict[int, VehicleType] = {}

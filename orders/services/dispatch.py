@@ -5,7 +5,7 @@ import logging
 from collections import defaultdict
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import datetime, timedelta
 
 from django.db import IntegrityError, connection, transaction
@@ -17,14 +17,14 @@ from fleet.control_queue import send_command
 from fleet.realtime import LIVE_GROUP, broadcast_on_commit
 from inventory import selectors as inventory_selectors
 from maintenance import selectors as maintenance_selectors
-from maps.models import Map
+from maps.models import Map, VehicleType
 from maps.selectors import load_graph, vehicle_profile
 from orders import capability, selectors
 from orders.assignment import Candidate, Job, Plan, plan_batch
 from orders.conf import setting
 from orders.models import OrderEvent, OrderSequence, TransportOrder
 from orders.services import dispatch_shortlist
-from orders.services.dispatch_factsheets import attach_factsheets
+from orders.services.dispatch_factsheets import Digest, attach_factsheets
 from orders.services.events import dispatch_on_commit, record, transition
 from orders.services.fit import Capabilities, allowed_vehicles, order_steps, route_through_steps
 from orders.services.vehicle_events import emit_vehicle_order_event
@@ -70,7 +70,7 @@ def dispatch_pending_orders(*, now: datetime | None = None) -> list[TransportOrd
             else:
                 ready.append(order)
         with subscriptions_read_once():
-            assigned = _assign_ready(ready, notes, now, gate)
+            assigned = _assign_ready(ready, notes, _Cycle(now, gate))
         if assigned:  # wakes control to read them at once: one command a cycle, not an order
             ids = [o.pk for o in assigned]
             transaction.on_commit(lambda: send_command("order.assigned", orders=ids), robust=True)
@@ -78,33 +78,52 @@ def dispatch_pending_orders(*, now: datetime | None = None) -> list[TransportOrd
     return assigned
 
 
+@dataclass
+class _Cycle:
+    """What a dispatch cycle reads once and its steps share (each read cost every cycle a
+    round trip to the database; docs/LOAD.md, twelfth round)."""
+
+    now: datetime
+    gate: selectors.SequenceGate
+    types: list[VehicleType] = field(default_factory=list)  # the layouts' vehicle types
+    short: dispatch_shortlist.Shortlist | None = None  # the shortlist being tried
+    energy: battery_selectors.DispatchEnergy | None = None  # of the idle vehicles
+
+
 def _assign_ready(
-    ready: list[TransportOrder], notes: dict[int, str], now: datetime, gate: selectors.SequenceGate
+    ready: list[TransportOrder], notes: dict[int, str], cycle: _Cycle
 ) -> list[TransportOrder]:
     if not ready:
         return []
-    held_since = now - timedelta(seconds=float(setting("COMMAND_HOLD")))
+    held_since = cycle.now - timedelta(seconds=float(setting("COMMAND_HOLD")))
+    cycle.types = list(VehicleType.objects.all())
     # A few orders and many idle vehicles: the nearest few decide (dispatch_shortlist).
-    short = dispatch_shortlist.shortlist(orders=ready, held_since=held_since, gate=gate)
-    if short is not None:
-        fleet = selectors.DispatchFleet(idle=short.idle)
-        _available(fleet)
-        scratch: dict[int, str] = {}
-        plans = _plan_maps(ready, fleet.idle, scratch, now, gate, short) if fleet.idle else None
+    cycle.short = dispatch_shortlist.shortlist(
+        orders=ready, held_since=held_since, gate=cycle.gate, types=cycle.types
+    )
+    if cycle.short is not None:
+        fleet = selectors.DispatchFleet(idle=cycle.short.idle)
+        _available(fleet, cycle, cycle.short.digests)
+        plans = _plan_maps(ready, fleet.idle, {}, cycle) if fleet.idle else None
         if plans is not None:
             return _carry_out(plans, notes)
+        cycle.short = None
     fleet = selectors.get_dispatch_fleet(held_since=held_since, with_factsheets=False)
-    _available(fleet)
+    _available(fleet, cycle)
     if not fleet.idle:
         notes.update(dict.fromkeys((o.pk for o in ready), _fleet_note(fleet)))
         return []
-    plans = _plan_maps(ready, fleet.idle, notes, now, gate)
+    plans = _plan_maps(ready, fleet.idle, notes, cycle)
     return _carry_out(plans or [], notes)
 
 
-def _available(fleet: selectors.DispatchFleet) -> None:
-    attach_factsheets(fleet.idle)  # decoded once per change, not every cycle
-    _hold_back(fleet)  # battery (charging, low) and maintenance (out of service)
+def _available(
+    fleet: selectors.DispatchFleet, cycle: _Cycle, digests: dict[int, Digest] | None = None
+) -> None:
+    """Attach the idle vehicles' factsheets and drop those held back (battery, maintenance)
+    from `fleet`; the battery facts read for them go to `cycle` (its job refusals use them)."""
+    attach_factsheets(fleet.idle, digests)  # decoded once per change, not every cycle
+    cycle.energy = _hold_back(fleet)
 
 
 @dataclass
@@ -116,15 +135,11 @@ class _MapPlan:
     orders: dict[int, TransportOrder]
     vehicles: dict[int, Vehicle]
     profiles: dict[int, VehicleProfile]
+    energy: battery_selectors.DispatchEnergy | None = None
 
 
 def _plan_maps(
-    ready: list[TransportOrder],
-    idle: list[Vehicle],
-    notes: dict[int, str],
-    now: datetime,
-    gate: selectors.SequenceGate,
-    short: dispatch_shortlist.Shortlist | None = None,
+    ready: list[TransportOrder], idle: list[Vehicle], notes: dict[int, str], cycle: _Cycle
 ) -> list[_MapPlan] | None:
     """Plan every map's orders against its idle vehicles (nothing written yet). With a
     shortlist, None unless its plans are the whole fleet's (then the caller plans again)."""
@@ -139,13 +154,13 @@ def _plan_maps(
         layout = layouts[map_pk]
         vehicles = [v for v in idle if v.map_id == layout.map_id]
         if not vehicles:
-            if short is not None:
+            if cycle.short is not None:
                 return None
             notes.update(
                 dict.fromkeys((o.pk for o in orders), f"no idle vehicle on map {layout.map_id}")
             )
             continue
-        planned = _plan_on_map(layout, orders, vehicles, idle_since, notes, now, gate, short)
+        planned = _plan_on_map(layout, orders, vehicles, idle_since, notes, cycle)
         if planned is None:
             return None
         plans.append(planned)
@@ -158,12 +173,11 @@ def _plan_on_map(
     vehicles: list[Vehicle],
     idle_since: dict[int, datetime],
     notes: dict[int, str],
-    now: datetime,
-    gate: selectors.SequenceGate,
-    short: dispatch_shortlist.Shortlist | None,
+    cycle: _Cycle,
 ) -> _MapPlan | None:
-    graph = load_graph(map=layout)
-    types = selectors.get_vehicle_types(vehicles=vehicles)
+    short, gate = cycle.short, cycle.gate
+    graph = (short.graphs.get(layout.pk) if short else None) or load_graph(map=layout)
+    types = selectors.get_vehicle_types(vehicles=vehicles, types=cycle.types)
     factsheets = {v.pk: v.factsheet for v in vehicles}
     profiles = {
         pk: capability.with_height(vehicle_profile(vehicle_type=t), factsheets[pk])
@@ -199,14 +213,15 @@ def _plan_on_map(
         jobs,
         candidates,
         graph.travel_times_to,
-        now=now,
+        now=cycle.now,
         by_profile=lambda goal, profile: _travel_times(graph, goal, profile),  # type: ignore[arg-type]
     )
     if short is not None and (plan.notes or len(plan.pairs) != len(orders)):
         return None  # an order the shortlist does not serve may still have a vehicle
     notes.update(plan.notes)
     order_by_pk = {o.pk: o for o in orders}
-    return _MapPlan(graph, plan, order_by_pk, {v.pk: v for v in vehicles}, profiles)
+    vehicle_by_pk = {v.pk: v for v in vehicles}
+    return _MapPlan(graph, plan, order_by_pk, vehicle_by_pk, profiles, cycle.energy)
 
 
 def _carry_out(plans: list[_MapPlan], notes: dict[int, str]) -> list[TransportOrder]:
@@ -230,7 +245,7 @@ def _route_and_assign(
     if isinstance(planned, str):
         notes[order.pk] = planned
     elif refusal := battery_selectors.job_refusal(
-        vehicle=vehicle, route=planned[0], graph=map_plan.graph
+        vehicle=vehicle, route=planned[0], graph=map_plan.graph, energy=map_plan.energy
     ):
         notes[order.pk] = f"{vehicle}: {refusal}"
     elif _assign(order=order, vehicle=vehicle, route=planned[0], route_steps=planned[1]):
@@ -287,10 +302,12 @@ def _assign(
     return True
 
 
-def _hold_back(fleet: selectors.DispatchFleet) -> None:
+def _hold_back(fleet: selectors.DispatchFleet) -> battery_selectors.DispatchEnergy:
     """Move idle vehicles that charge, need charge, are below the critical charge level their
-    factsheet states (3.0, REFERENCE J.46) or are out of service to `unavailable`."""
-    holds = battery_selectors.dispatch_holds(vehicles=fleet.idle)
+    factsheet states (3.0, REFERENCE J.46) or are out of service to `unavailable`; returns the
+    battery facts read for them."""
+    energy = battery_selectors.read_dispatch_energy(vehicles=fleet.idle)
+    holds = battery_selectors.dispatch_holds(vehicles=fleet.idle, energy=energy)
     holds |= maintenance_selectors.out_of_service(vehicle_ids=[v.pk for v in fleet.idle])
     for vehicle in fleet.idle:  # below its factsheet's critical level: charging orders only
         critical = capability.critical_charge(vehicle.factsheet)
@@ -300,6 +317,7 @@ def _hold_back(fleet: selectors.DispatchFleet) -> None:
     for reason in holds.values():
         fleet.unavailable[reason.split(" (")[0].split(":")[0]] += 1
     fleet.idle = [v for v in fleet.idle if v.pk not in holds]
+    return energy
 
 
 def _fleet_note(fleet: selectors.DispatchFleet) -> str:

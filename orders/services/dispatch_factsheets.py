@@ -38,29 +38,38 @@ _parts: dict[str, Any] = {}
 _MAX_PARTS = 10_000  # old parts of replaced factsheets are dropped past this
 
 
-def attach_factsheets(vehicles: list[Vehicle]) -> None:
+def attach_factsheets(vehicles: list[Vehicle], digests: dict[int, Digest] | None = None) -> None:
     """Set `factsheet` on `vehicles` (loaded with it deferred) as stored now: one query for the
-    fingerprints, one more for the factsheets that are new or changed."""
+    fingerprints (none when `digests` has them: a read annotated with `factsheet_digest`), one more
+    for the factsheets that are new or changed."""
     if not vehicles:
         return
-    if connection.vendor == "postgresql":
-        digest: Func = _JsonbHash("factsheet")
-    else:
-        digest = MD5(Cast("factsheet", output_field=TextField()))
-    digests: dict[int, Digest] = dict(
-        Vehicle.objects.filter(pk__in=[v.pk for v in vehicles])
-        .annotate(digest=digest)
-        .values_list("pk", "digest")
-    )
+    if digests is None:
+        digests = dict(
+            Vehicle.objects.filter(pk__in=[v.pk for v in vehicles])
+            .annotate(digest=factsheet_digest())
+            .order_by()
+            .values_list("pk", "digest")
+        )
     missing = (None, None)
     stale = [pk for pk, now in digests.items() if _decoded.get(pk, missing)[0] != now]
     if stale:
         # A factsheet saved between the two queries is stored under the older fingerprint and
         # so fetched again next cycle: never kept stale.
-        for pk, factsheet in Vehicle.objects.filter(pk__in=stale).values_list("pk", "factsheet"):
+        for pk, factsheet in (
+            Vehicle.objects.filter(pk__in=stale).order_by().values_list("pk", "factsheet")
+        ):
             _decoded[pk] = (digests[pk], _shared(factsheet))
     for vehicle in vehicles:
         vehicle.factsheet = _decoded.get(vehicle.pk, missing)[1] if vehicle.pk in digests else None
+
+
+def factsheet_digest() -> Func:
+    """The fingerprint of a vehicle's factsheet that `attach_factsheets` compares, as an
+    expression to annotate a read of vehicles with."""
+    if connection.vendor == "postgresql":
+        return _JsonbHash("factsheet")
+    return MD5(Cast("factsheet", output_field=TextField()))
 
 
 def _shared(factsheet: Any) -> Any:

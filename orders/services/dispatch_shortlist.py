@@ -24,13 +24,14 @@ import heapq
 from dataclasses import dataclass, field
 from datetime import datetime
 
-from django.db.models import Q
+from django.db.models import Exists, OuterRef, Q
 
 from maps.models import VehicleType
 from maps.selectors import load_graph
 from orders import selectors
 from orders.assignment import Candidate, DistancesTo, Job
 from orders.models import TransportOrder
+from orders.services.dispatch_factsheets import Digest, factsheet_digest
 from orders.services.fit import order_steps
 from robots.models import Vehicle
 from traffic import NoRouteError, RoutingGraph
@@ -47,6 +48,8 @@ class Shortlist:
     idle: list[Vehicle]
     nearest: dict[int, frozenset[int]] = field(default_factory=dict)  # order pk -> vehicle pks
     bound: set[int] = field(default_factory=set)  # orders only one known vehicle may take
+    graphs: dict[int, RoutingGraph] = field(default_factory=dict)  # map pk -> graph it used
+    digests: dict[int, Digest] = field(default_factory=dict)  # vehicle pk -> factsheet's
 
     def covers(
         self,
@@ -76,16 +79,21 @@ class Shortlist:
 
 
 def shortlist(
-    *, orders: list[TransportOrder], held_since: datetime, gate: selectors.SequenceGate
+    *,
+    orders: list[TransportOrder],
+    held_since: datetime,
+    gate: selectors.SequenceGate,
+    types: list[VehicleType],
 ) -> Shortlist | None:
     """The shortlist for `orders` (ready to assign), or None when the whole fleet should be
-    priced: many orders, few vehicles, vehicle types on the site, or no vehicle in reach."""
-    if not orders or len(orders) > MAX_ORDERS or VehicleType.objects.exists():
+    priced: many orders, few vehicles, vehicle types on the site (`types`), or no vehicle in
+    reach."""
+    if not orders or len(orders) > MAX_ORDERS or types:
         return None
     positions = _possibly_idle()
     wanted: set[int] = set()
     found = Shortlist(idle=[])
-    graphs: dict[int, RoutingGraph] = {}
+    graphs = found.graphs
     for order in orders:
         bound = gate.vehicle_of.get(order.sequence_id or 0) or order.intended_vehicle_id
         if bound is not None:
@@ -103,7 +111,7 @@ def shortlist(
         wanted |= nearest
     if not wanted or len(wanted) * _WORTH_IT > len(positions):
         return None
-    found.idle = _idle(wanted, held_since)
+    found.idle, found.digests = _idle(wanted, held_since)
     return found
 
 
@@ -148,18 +156,20 @@ def _nearest(
     return frozenset(pk for seconds, pk in times if seconds <= last)
 
 
-def _idle(pks: set[int], held_since: datetime) -> list[Vehicle]:
+def _idle(pks: set[int], held_since: datetime) -> tuple[list[Vehicle], dict[int, Digest]]:
     """The vehicles of `pks` that are idle as `selectors.get_dispatch_fleet` has it (online,
-    available, not held by a command since `held_since`, no active order), read afresh."""
+    available, not held by a command since `held_since`, no active order), read afresh, and
+    their factsheets' fingerprints (`attach_factsheets`), in one query with the held ones."""
     held = selectors.list_held_vehicles(since=held_since)
-    busy = set(
-        TransportOrder.objects.filter(
-            status__in=TransportOrder.ACTIVE_STATUSES, vehicle_id__in=pks
-        ).values_list("vehicle_id", flat=True)
+    busy = TransportOrder.objects.filter(
+        status__in=TransportOrder.ACTIVE_STATUSES, vehicle_id=OuterRef("pk")
     )
-    rows = Vehicle.objects.filter(pk__in=pks, connection=Vehicle.Connection.ONLINE)
-    return [
-        v
-        for v in rows.defer("factsheet").order_by("pk")
-        if v.is_available and v.pk not in held and v.pk not in busy
-    ]
+    rows = (
+        Vehicle.objects.filter(pk__in=pks, connection=Vehicle.Connection.ONLINE)
+        .exclude(Exists(busy))
+        .defer("factsheet")
+        .annotate(factsheet_digest=factsheet_digest())
+        .order_by("pk")
+    )
+    idle = [v for v in rows if v.is_available and v.pk not in held]
+    return list[Vehicle](idle), {v.pk: v.factsheet_digest for v in idle}

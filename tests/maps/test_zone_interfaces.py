@@ -235,3 +235,11 @@ def test_admin_map_page_links_to_the_layout_editor(client, staff, demo_map: Map)
 
     assert f'href="/layouts/{demo_map.pk}/edit/"' in page
     assert f'href="/layouts/{demo_map.pk}/edit/"' in listing
+
+
+def test_a_nul_character_in_a_query_parameter_is_a_400_not_a_500(api) -> None:
+    """PostgreSQL refuses NUL in text (psycopg raises DataError before sending): a bad request,
+    answered with the reason, like any other bad input."""
+    response = api.get("/api/v1/zones/", {"map": "de\x00mo"})
+    assert response.status_code == 400
+    assert "database cannot take" in response.json()["detail"]

@@ -5,7 +5,7 @@ from datetime import timedelta
 import pytest
 from django.utils import timezone
 
-from orders import services
+from orders import selectors, services
 from orders.models import OrderEvent, TransportOrder
 from tests.factories import VehicleFactory
 
@@ -93,6 +93,47 @@ def test_priority_then_deadline_decide_who_gets_the_only_vehicle(station) -> Non
 
     services.mark_order_finished(order_id=urgent.pk)
     assert services.dispatch_pending_orders() == [due]
+
+
+def test_pending_orders_are_ranked_by_priority_then_deadline_missing_last_then_age(
+    station, django_assert_num_queries
+) -> None:
+    now = timezone.now()
+    oldest = new_order(station, "PICK-1")
+    later_due = new_order(station, "PICK-2", deadline=now + timedelta(hours=2))
+    urgent = new_order(station, "PICK-3", priority=2)
+    sooner_due = new_order(station, "PICK-4", deadline=now + timedelta(hours=1))
+    newest = new_order(station, "PICK-1")
+    TransportOrder.objects.filter(pk=oldest.pk).update(created_at=now - timedelta(minutes=5))
+    new_order(station, "PICK-2", status=Status.ASSIGNED)  # not pending
+
+    # The orders and their steps; the intended vehicle and type reads run only when one is set.
+    with django_assert_num_queries(2):
+        pending = selectors.list_pending_orders()
+
+    assert pending == [urgent, sooner_due, later_due, oldest, newest]
+
+
+def test_a_cycle_reads_the_battery_facts_once_however_many_orders_it_assigns(
+    station, django_assert_num_queries
+) -> None:
+    from django.db import connection
+    from django.test.utils import CaptureQueriesContext
+
+    def cycle_queries(orders: int) -> int:
+        TransportOrder.objects.all().delete()
+        VehicleFactory.create_batch(orders, battery_charge=90.0, last_node_id="A1.3")
+        for _ in range(orders):
+            new_order(station, "PICK-2")
+        with CaptureQueriesContext(connection) as queries:
+            assert len(services.dispatch_pending_orders()) == orders
+        return len(queries.captured_queries)
+
+    cycle_queries(1)  # builds the routing graph
+    one, three = cycle_queries(1), cycle_queries(3)
+    # Per further order only its claim: savepoint, UPDATE, the event's INSERT, release. The
+    # policies, consumption and chargers are read once (they were three more queries an order).
+    assert three - one == 2 * 4
 
 
 def test_the_vehicle_idle_longest_gets_the_order_on_a_tie(station) -> None:

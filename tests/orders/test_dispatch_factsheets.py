@@ -4,7 +4,7 @@ import pytest
 
 from orders import services
 from orders.models import TransportOrder
-from orders.services.dispatch_factsheets import attach_factsheets, forget
+from orders.services.dispatch_factsheets import attach_factsheets, factsheet_digest, forget
 from robots.models import Vehicle
 from tests.factories import VehicleFactory
 
@@ -32,6 +32,25 @@ def test_an_unchanged_factsheet_is_not_fetched_again(django_assert_num_queries) 
         attach_factsheets(again)
 
     assert again[0].factsheet == CRITICAL_50
+
+
+@pytest.mark.django_db
+def test_fingerprints_read_with_the_vehicles_save_the_query(django_assert_num_queries) -> None:
+    vehicle = VehicleFactory(factsheet=CRITICAL_50)
+    attach_factsheets(deferred(vehicle))
+    Vehicle.objects.filter(pk=vehicle.pk).update(factsheet=CRITICAL_30)
+
+    rows = list(
+        Vehicle.objects.filter(pk=vehicle.pk)
+        .defer("factsheet")
+        .annotate(factsheet_digest=factsheet_digest())
+    )
+    with django_assert_num_queries(1):  # only the changed factsheet
+        attach_factsheets(rows, {v.pk: v.factsheet_digest for v in rows})
+    assert rows[0].factsheet == CRITICAL_30
+
+    with django_assert_num_queries(0):
+        attach_factsheets(rows, {v.pk: v.factsheet_digest for v in rows})
 
 
 @pytest.mark.django_db
