@@ -2,7 +2,7 @@
 
 from typing import Any
 
-from django.db.models import QuerySet
+from django.db.models import Prefetch, QuerySet, prefetch_related_objects
 from django.shortcuts import get_object_or_404
 from drf_spectacular.utils import (
     OpenApiExample,
@@ -223,6 +223,11 @@ class TransportOrderListCreateApi(generics.ListAPIView[TransportOrder]):
         if "vehicle_type" in fields:
             fields["vehicle_type"] = _vehicle_type(fields["vehicle_type"])
         order = services.create_transport_order(created_by=request.user, **fields)
+        # Two reads for the answer's steps (with their stations) and events, not one per step:
+        # the answer is written before the order commits, so dispatch waits for it.
+        prefetch_related_objects(
+            [order], Prefetch("steps", OrderStep.objects.select_related("station")), "events"
+        )
         return Response(TransportOrderSerializer(order).data, status=status.HTTP_201_CREATED)
 
 

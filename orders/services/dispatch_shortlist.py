@@ -159,7 +159,8 @@ def _nearest(
 def _idle(pks: set[int], held_since: datetime) -> tuple[list[Vehicle], dict[int, Digest]]:
     """The vehicles of `pks` that are idle as `selectors.get_dispatch_fleet` has it (online,
     available, not held by a command since `held_since`, no active order), read afresh, and
-    their factsheets' fingerprints (`attach_factsheets`), in one query with the held ones."""
+    their factsheets' fingerprints (`attach_factsheets`): the held ones in one query, the
+    rest in another."""
     held = selectors.list_held_vehicles(since=held_since)
     busy = TransportOrder.objects.filter(
         status__in=TransportOrder.ACTIVE_STATUSES, vehicle_id=OuterRef("pk")

@@ -51,6 +51,29 @@ def test_post_creates_an_order_by_station_ids(api, demo_map, erp) -> None:
     assert order.earliest_start == start
 
 
+def test_the_answer_to_a_post_reads_its_steps_at_once(
+    api, demo_map, django_assert_num_queries
+) -> None:
+    """The answer is rendered inside the order's transaction: a read per step delayed dispatch."""
+
+    def queries(stations: list[str]) -> int:
+        from django.db import connection
+        from django.test.utils import CaptureQueriesContext
+
+        steps = [{"station": s, "operation": "PICK"} for s in stations[:-1]]
+        steps.append({"station": stations[-1], "operation": "DROP"})
+        with CaptureQueriesContext(connection) as captured:
+            response = api.post("/api/v1/orders/", {"steps": steps}, format="json")
+        assert response.status_code == 201, response.content
+        assert [s["station"] for s in response.json()["steps"]] == stations
+        return len(captured.captured_queries)
+
+    queries(["PICK-1", "DROP-1"])  # the routing graph's first build
+    two = queries(["PICK-1", "DROP-1"])
+    four = queries(["PICK-1", "PICK-2", "PICK-3", "DROP-1"])
+    assert four == two
+
+
 @pytest.mark.parametrize(
     ("body", "field"),
     [
