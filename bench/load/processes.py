@@ -172,6 +172,19 @@ def wait_for(condition: Any, timeout: float, what: str, children: list[Child]) -
     raise SystemExit(f"timed out after {timeout:.0f} s waiting for {what}")
 
 
+def order_statuses(url: str, timeline: dict[str, list[float | None]]) -> dict[str, int]:
+    """How many of the orders the API client posted are in each status at the end of the
+    window (FINISHED, IN_PROGRESS, …): the "nothing lost" count of the run."""
+    ids = [int(order_id.removeprefix("TO-")) for order_id in timeline]
+    with psycopg.connect(url, autocommit=True) as connection:
+        rows = connection.execute(
+            "SELECT status, count(*) FROM orders_transportorder WHERE id = ANY(%s) "
+            "GROUP BY status ORDER BY status",
+            (ids,),
+        ).fetchall()
+    return {str(status): int(count) for status, count in rows}
+
+
 def order_stages(url: str, timeline: dict[str, list[float | None]]) -> dict[str, Any]:
     """Where API → published goes, per order the API client posted: POST started → row created
     (the request), created → assigned (Celery and a dispatch cycle), assigned → first order

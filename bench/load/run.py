@@ -40,6 +40,7 @@ from bench.load.processes import (
     db_stats,
     free_ports,
     order_stages,
+    order_statuses,
     python,
     wait_for,
 )
@@ -298,6 +299,7 @@ def measure(
     timeline = probe_results["api"].pop("timeline", None)
     if timeline:
         probe_results["api"]["stages"] = order_stages(db_url, timeline)
+        probe_results["api"]["status_at_end"] = order_statuses(db_url, timeline)
     memory = {child.name: child.rss_mb() for child in children}
     figures = report(args, before, after, probe_results, memory, registered_s, info)
     figures["broker_dropping_clients"] = dropping_clients(work / "mosquitto.log")

@@ -54,6 +54,10 @@ def test_quick_load_run_measures_every_figure(tmp_path: Path) -> None:
     assert figures["api"]["errors"] == 0
     assert figures["api"]["published"] > 0
     assert figures["api"]["post_to_published_p95_ms"] is not None
+    # every posted order is somewhere: finished, under way or waiting, none failed
+    statuses = figures["api"]["status_at_end"]
+    assert sum(statuses.values()) == figures["api"]["posted"]
+    assert not {"FAILED", "CANCELLED"} & statuses.keys()
     assert figures["browser"]["messages_per_s"] > 0
     assert figures["browser"]["closed_by_server"] == 0
     assert figures["db_rows_per_s"]["updated"] > 0
