@@ -175,14 +175,20 @@ def wait_for(condition: Any, timeout: float, what: str, children: list[Child]) -
 def order_statuses(url: str, timeline: dict[str, list[float | None]]) -> dict[str, int]:
     """How many of the orders the API client posted are in each status at the end of the
     window (FINISHED, IN_PROGRESS, …): the "nothing lost" count of the run."""
+    rows = _read_posted(
+        url,
+        timeline,
+        "SELECT status, count(*) FROM orders_transportorder WHERE id = ANY(%s) "
+        "GROUP BY status ORDER BY status",
+    )
+    return {str(status): int(count) for status, count in rows}
+
+
+def _read_posted(url: str, timeline: dict[str, list[float | None]], sql: str) -> list[Any]:
+    """Rows of `sql`, whose one parameter is the ids of the orders the API client posted."""
     ids = [int(order_id.removeprefix("TO-")) for order_id in timeline]
     with psycopg.connect(url, autocommit=True) as connection:
-        rows = connection.execute(
-            "SELECT status, count(*) FROM orders_transportorder WHERE id = ANY(%s) "
-            "GROUP BY status ORDER BY status",
-            (ids,),
-        ).fetchall()
-    return {str(status): int(count) for status, count in rows}
+        return connection.execute(sql, (ids,)).fetchall()
 
 
 def order_stages(url: str, timeline: dict[str, list[float | None]]) -> dict[str, Any]:
@@ -191,13 +197,12 @@ def order_stages(url: str, timeline: dict[str, list[float | None]]) -> dict[str,
     message seen on MQTT (control's wake-up, plan and publish); p50/p95/max in ms."""
     from bench.load.probes import ms, percentile
 
-    ids = [int(order_id.removeprefix("TO-")) for order_id in timeline]
-    with psycopg.connect(url, autocommit=True) as connection:
-        rows = connection.execute(
-            "SELECT id, extract(epoch FROM created_at), extract(epoch FROM assigned_at) "
-            "FROM orders_transportorder WHERE id = ANY(%s)",
-            (ids,),
-        ).fetchall()
+    rows = _read_posted(
+        url,
+        timeline,
+        "SELECT id, extract(epoch FROM created_at), extract(epoch FROM assigned_at) "
+        "FROM orders_transportorder WHERE id = ANY(%s)",
+    )
     stages: dict[str, list[float]] = {"request": [], "to_assigned": [], "to_published": []}
     for pk, created, assigned in rows:
         posted, published = timeline[f"TO-{pk}"]
