@@ -28,7 +28,7 @@ import urllib.error
 import urllib.request
 import uuid
 from collections import defaultdict
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -139,6 +139,15 @@ class HealthWatch(threading.Thread):
 
     def role(self, name: str) -> str | None:
         return self.latest.get(name, {}).get("role")
+
+    def wait(
+        self, condition: Callable[[], object], timeout: float, message: str, fleet: Fleet | None
+    ) -> float:
+        """`wait_until`, with each control's last answer in the error (what a failed CI shows)."""
+        try:
+            return wait_until(condition, timeout, message, fleet)
+        except TimeoutError as error:
+            raise TimeoutError(f"{error}; last answers: {self.latest}") from None
 
     def stop(self) -> None:
         self._halt.set()
@@ -264,10 +273,19 @@ def one_round(
 ) -> dict[str, Any]:
     """Inject one fault into the current leader; the seconds until a control is ready again."""
     fleet = context.fleet
-    wait_until(lambda: watch.ready_leader() is not None, 120, "a ready leader", fleet)
-    others = [n for n in controls if watch.ready_leader() and n != watch.ready_leader()[0]]  # type: ignore[index]
-    wait_until(lambda: all(watch.role(n) == "standby" for n in others), 180, "a standby", fleet)
-    leader, fencing = watch.ready_leader() or ("", 0)
+    settled: list[tuple[str, int]] = []
+
+    def one_leader_the_rest_standby() -> bool:
+        # Judged on one reading: the leader may change between rounds on its own (a starved
+        # renewal thread steps down), so "the others" are whoever does not lead at this moment.
+        now = watch.ready_leader()
+        if now is None or any(watch.role(n) != "standby" for n in controls if n != now[0]):
+            return False
+        settled[:] = [now]
+        return True
+
+    watch.wait(one_leader_the_rest_standby, 180, "a ready leader and the rest standby", fleet)
+    leader, fencing = settled[0]
     process = controls[leader]
     started = time.monotonic()
     if kind == "kill":
@@ -285,14 +303,14 @@ def one_round(
             return False
         return now[1] > fencing  # a new term (also after a database restart)
 
-    failover = wait_until(taken_over, 120, f"takeover after {kind}", None)
+    failover = watch.wait(taken_over, 120, f"takeover after {kind}", None)
     new_leader = (watch.ready_leader() or ("?", 0))[0]
     if kind == "kill":
         process.start()
     elif kind == "freeze":
         time.sleep(max(0.0, freeze - (time.monotonic() - started)))
         process.signal(signal.SIGCONT)
-    wait_until(
+    watch.wait(
         lambda: watch.role(leader) == "standby" or leader == new_leader,
         180,  # a restarted control imports Django first: slow on a loaded machine
         "old leader back as standby",
