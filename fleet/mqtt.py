@@ -101,6 +101,29 @@ class _BufferedSocket:
         return getattr(self._sock, name)
 
 
+class ReceivedMessage(mqtt.MQTTMessage):
+    """A received QoS 0 publish, as `on_message` gets it: paho's `MQTTMessage` without building
+    an `MQTTMessageInfo` (a lock and a condition, 3 µs of 3.5) that only sent messages use."""
+
+    __slots__ = ()
+
+    _NO_INFO = mqtt.MQTTMessageInfo(0)  # shared: nobody waits on a received message
+
+    def __init__(self, topic: bytes, payload: bytes, header: int) -> None:  # noqa: PLW0231
+        # paho's __init__ is skipped on purpose (it builds the MQTTMessageInfo); every slot
+        # it sets is set here.
+        self.timestamp = mqtt.time_func()
+        self.state = mqtt.mqtt_ms_invalid
+        self.dup = bool(header & 0x08)
+        self.mid = 0
+        self._topic = topic
+        self.payload = payload
+        self.qos = 0
+        self.retain = bool(header & 0x01)
+        self.info = self._NO_INFO
+        self.properties = None
+
+
 class BufferedClient(mqtt.Client):
     """A paho client that reads its socket in chunks and handles a burst of packets per read.
 
@@ -135,11 +158,7 @@ class BufferedClient(mqtt.Client):
             return super()._handle_publish()
         if len(data) < 2 + size:
             return super()._handle_publish()  # paho raises MalformedPacket
-        message = mqtt.MQTTMessage(topic=bytes(data[2 : 2 + size]))
-        message.retain = bool(header & 0x01)
-        message.dup = bool(header & 0x08)
-        message.payload = bytes(data[2 + size :])
-        message.timestamp = mqtt.time_func()
+        message = ReceivedMessage(bytes(data[2 : 2 + size]), bytes(data[2 + size :]), header)
         on_message = self.on_message
         if on_message is not None:
             with self._in_callback_mutex:
@@ -220,11 +239,11 @@ class BufferedClient(mqtt.Client):
                 size = (buffer[start] << 8) | buffer[start + 1]
                 if size == 0 or 2 + size > length:
                     break  # paho raises MalformedPacket
-                message = mqtt.MQTTMessage(topic=buffer[start + 2 : start + 2 + size])
-                message.retain = bool(header & 0x01)
-                message.dup = bool(header & 0x08)
-                message.payload = buffer[start + 2 + size : start + length]
-                message.timestamp = mqtt.time_func()
+                message = ReceivedMessage(
+                    buffer[start + 2 : start + 2 + size],
+                    buffer[start + 2 + size : start + length],
+                    header,
+                )
                 pos = sock._pos = start + length
                 handled += 1
                 if on_message is not None:

@@ -16,7 +16,7 @@ import pytest
 from django.conf import settings
 from paho.mqtt.enums import CallbackAPIVersion
 
-from fleet.mqtt import READ_CHUNK, _BufferedSocket, make_client
+from fleet.mqtt import READ_CHUNK, ReceivedMessage, _BufferedSocket, make_client
 
 
 def test_the_wrapper_hands_out_what_one_read_got_in_the_sizes_asked_for() -> None:
@@ -331,3 +331,18 @@ def test_a_read_pause_gathers_a_steady_stream_into_fewer_reads(
     # 200 messages over at least a second: about one read per message, against one per 50 ms
     assert paced <= 40
     assert paced * 2 < at_once
+
+
+def test_a_received_message_has_every_field_paho_s_own_message_has() -> None:
+    ours = ReceivedMessage(b"uagv/v2/M/S/state", b"{}", 0x30 | 0x08 | 0x01)
+    paho = mqtt.MQTTMessage(topic=b"uagv/v2/M/S/state")
+    paho.payload, paho.retain, paho.dup = b"{}", True, True
+    assert isinstance(ours, mqtt.MQTTMessage)
+    for name in mqtt.MQTTMessage.__slots__:
+        if name not in ("timestamp", "info"):
+            assert getattr(ours, name) == getattr(paho, name), name
+    assert ours.topic == "uagv/v2/M/S/state"
+    assert ours.timestamp > 0
+    assert ours.info.mid == 0
+    plain = ReceivedMessage(b"t", b"", 0x30)
+    assert (plain.retain, plain.dup) == (False, False)
