@@ -101,6 +101,13 @@ class DjangoStore:
         registered = robot_services.register_vehicles(
             identities=[v.key for v in batch.new_vehicles]
         )
+        # Every order and vehicle event of the batch asks for the webhook subscriptions: one
+        # read for the flush instead of a query per event (3 % of control's CPU under load).
+        with order_services.subscriptions_read_once():
+            self._apply_batch(batch)
+        return registered
+
+    def _apply_batch(self, batch: FlushBatch) -> None:
         with transaction.atomic():
             # Vehicle webhooks compare with the rows before they change (never raises).
             order_services.emit_vehicle_changes(snapshots=batch.snapshots)
@@ -127,7 +134,6 @@ class DjangoStore:
                 )
         if batch.traffic_waits:  # last: a failure above retries the batch without doubling them
             _record_traffic_waits(batch.traffic_waits)
-        return registered
 
     def layouts_revision(self) -> object:
         """Changes whenever a map is added, removed or edited (zones included)."""

@@ -56,6 +56,7 @@ from orders.services.vehicles import (
     send_vehicle_to_park,
 )
 from orders.services.webhooks import (
+    active_subscriptions,
     attempt_webhook_delivery,
     create_webhook_subscription,
     delete_webhook_subscription,
@@ -64,6 +65,7 @@ from orders.services.webhooks import (
     ping_webhook_subscription,
     prune_webhook_deliveries,
     retry_webhook_deliveries,
+    subscriptions_read_once,
 )
 
 __all__ = [
@@ -71,6 +73,7 @@ __all__ = [
     "StepSpec",
     "IdempotencyKeyReused",
     "StoredResponse",
+    "active_subscriptions",
     "attempt_webhook_delivery",
     "authenticate_api_token",
     "cancel_transport_order",
@@ -108,6 +111,7 @@ __all__ = [
     "requeue_order",
     "resume_vehicle",
     "retry_webhook_deliveries",
+    "subscriptions_read_once",
     "revoke_api_token",
     "save_recurring_order",
     "send_vehicle_to_charge",

@@ -11,8 +11,7 @@ from typing import Any
 
 from django.db import transaction
 
-from orders import selectors
-from orders.services.webhooks import emit_event
+from orders.services.webhooks import active_subscriptions, emit_event
 from robots.models import Vehicle
 
 logger = logging.getLogger(__name__)
@@ -42,7 +41,7 @@ def emit_vehicle_changes(*, snapshots: Sequence[dict[str, Any]]) -> int:
 
 
 def _emit(snapshots: Sequence[dict[str, Any]]) -> int:
-    subscriptions = selectors.list_active_subscriptions()
+    subscriptions = active_subscriptions()
     if not any(s.wants(event) for s in subscriptions for event in _STATE_EVENTS):
         return 0
     rows = {s["pk"]: s for s in snapshots if "pk" in s}

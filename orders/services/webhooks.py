@@ -160,11 +160,15 @@ def subscriptions_read_once() -> Iterator[None]:
         _snapshot.reset(token)
 
 
-def _subscribers(event_type: str) -> list[WebhookSubscription]:
+def active_subscriptions() -> list[WebhookSubscription]:
+    """The active subscriptions: those read for the enclosing `subscriptions_read_once` block,
+    else read now."""
     active = _snapshot.get()
-    if active is None:
-        active = selectors.list_active_subscriptions()
-    return [s for s in active if s.wants(event_type)]
+    return selectors.list_active_subscriptions() if active is None else active
+
+
+def _subscribers(event_type: str) -> list[WebhookSubscription]:
+    return [s for s in active_subscriptions() if s.wants(event_type)]
 
 
 def _create_deliveries(

@@ -3,14 +3,15 @@
 import pytest
 
 from control.controller import Controller
-from control.execution import OrderExecution, Window
+from control.execution import OrderExecution, Progress, Window
 from control.order_messages import LoadJob, build_order
 from control.persistence import DjangoStore, job_order_id
+from control.ports import FlushBatch
 from maintenance.services import send_to_station
 from maps.models import Station
 from maps.services import create_zone
-from orders import services
-from orders.models import TransportOrder, VehicleCommand
+from orders import selectors, services
+from orders.models import TransportOrder, VehicleCommand, WebhookDelivery
 from robots.models import Vehicle
 from tests.control.fakes import state
 from tests.factories import VehicleFactory
@@ -109,3 +110,45 @@ def test_the_store_reads_the_orders_a_command_names_and_only_those(demo_map, mon
     assert set(every) == {named.pk, other.pk, job_order_id("park", move.pk)}
     assert found == [every[named.pk], every[job_order_id("park", move.pk)]]
     assert store.assigned_orders(orders=[], charge_sessions=[move.pk], moves=[]) == []
+
+
+def test_a_flush_reads_the_webhook_subscriptions_once_and_still_records_every_event(
+    demo_map, monkeypatch
+) -> None:
+    """Issue 11: each order event asked for the subscriptions (a query per event); a flush
+    now reads them once for all its progress, and the subscriber still gets every event."""
+    monkeypatch.setattr("orders.services.dispatch.send_command", lambda kind, **payload: None)
+    erp = services.create_integration_client(name="erp", scopes=["orders:read"])
+    services.create_webhook_subscription(client=erp, url="http://127.0.0.1:9/", events=["*"])
+    VehicleFactory(last_node_id="A0.0")
+    pick, drop = (Station.objects.get(station_id=s) for s in ("PICK-1", "DROP-1"))
+    order = services.create_transport_order(source=pick, destination=drop)
+    services.dispatch_pending_orders()
+    batch = FlushBatch(
+        progress=[
+            Progress("started", order.pk),
+            Progress("step", order.pk, {"step": "pick", "node": "S-PICK-1", "index": "0"}),
+            Progress("step", order.pk, {"step": "drop", "node": "S-DROP-1", "index": "1"}),
+            Progress("finished", order.pk),
+        ]
+    )
+    before = WebhookDelivery.objects.count()
+    reads = []
+    real = selectors.list_active_subscriptions
+    monkeypatch.setattr(selectors, "list_active_subscriptions", lambda: reads.append(1) or real())
+
+    DjangoStore().flush(batch)
+
+    order.refresh_from_db()
+    assert order.status == TransportOrder.Status.FINISHED
+    assert len(reads) == 1
+    recorded = WebhookDelivery.objects.order_by("pk")[before:]
+    assert sorted(d.event_type for d in recorded) == sorted(
+        [
+            "order.started",
+            "order.step_reached",
+            "order.step_reached",
+            "order.finished",
+            "vehicle.order_finished",
+        ]
+    )
