@@ -56,7 +56,6 @@ from orders.services.vehicles import (
     send_vehicle_to_park,
 )
 from orders.services.webhooks import (
-    active_subscriptions,
     attempt_webhook_delivery,
     create_webhook_subscription,
     delete_webhook_subscription,
@@ -73,7 +72,6 @@ __all__ = [
     "StepSpec",
     "IdempotencyKeyReused",
     "StoredResponse",
-    "active_subscriptions",
     "attempt_webhook_delivery",
     "authenticate_api_token",
     "cancel_transport_order",
@@ -111,10 +109,10 @@ __all__ = [
     "requeue_order",
     "resume_vehicle",
     "retry_webhook_deliveries",
-    "subscriptions_read_once",
     "revoke_api_token",
     "save_recurring_order",
     "send_vehicle_to_charge",
     "send_vehicle_to_park",
+    "subscriptions_read_once",
     "update_order_priority",
 ]
