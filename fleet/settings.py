@@ -252,6 +252,10 @@ WORKER_DB_CONN_MAX_AGE = env.int("WORKER_DB_CONN_MAX_AGE", default=300)
 CONTROL_CAUSE_LOG = env.str("CONTROL_CAUSE_LOG", default="")
 # Allocations between collections of control's youngest generation (Python's default is 700).
 CONTROL_GC_THRESHOLD = env.int("CONTROL_GC_THRESHOLD", default=50_000)
+# Seconds between the GIL hand-overs Python forces in control (its default is 0.005): shorter
+# lets the paho thread take messages off the socket sooner while another thread computes,
+# longer costs fewer thread switches (docs/LOAD.md, third and thirteenth rounds).
+CONTROL_SWITCH_INTERVAL = env.float("CONTROL_SWITCH_INTERVAL", default=0.001)
 # Leadership of a standby pair (control/leader.py LeaseTimes, seconds): renew the lease every
 # RENEW_EVERY; publish only within LEASE of the last renewal; the database ends a silent leader's
 # session after SERVER_TIMEOUT; a new leader waits GUARD; a standby polls every RETRY_EVERY; a

@@ -15,8 +15,6 @@ from control.leader import Leadership, LeaseTimes, conninfo_from_settings
 from control.service import build_control_loop
 from control.standby import StandbyControl
 
-SWITCH_INTERVAL = 0.001  # s between forced GIL hand-overs
-
 
 class Command(BaseCommand):
     help = (
@@ -41,7 +39,7 @@ class Command(BaseCommand):
         gc.set_threshold(settings.CONTROL_GC_THRESHOLD, 20, 20)
         # The paho thread waits for the GIL while the main loop plans or builds rows: a shorter
         # switch interval (default 5 ms) lets it take messages off the socket sooner.
-        sys.setswitchinterval(SWITCH_INTERVAL)
+        sys.setswitchinterval(settings.CONTROL_SWITCH_INTERVAL)
         control = StandbyControl(leadership, build_control_loop)
         health = start_health_server(settings.CONTROL_HEALTH_PORT, control.status)
         heartbeat = LeaderHeartbeat(control.status).start()
