@@ -109,7 +109,7 @@ class ReceivedMessage(mqtt.MQTTMessage):
 
     _NO_INFO = mqtt.MQTTMessageInfo(0)  # shared: nobody waits on a received message
 
-    def __init__(self, topic: bytes, payload: bytes, header: int) -> None:  # noqa: PLW0231
+    def __init__(self, topic: bytes, payload: bytes, header: int) -> None:
         # paho's __init__ is skipped on purpose (it builds the MQTTMessageInfo); every slot
         # it sets is set here.
         self.timestamp = mqtt.time_func()

@@ -24,11 +24,9 @@ import signal
 import sys
 import threading
 import time
-import urllib.error
-import urllib.request
 import uuid
 from collections import defaultdict
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -37,8 +35,9 @@ import paho.mqtt.client as mqtt
 from paho.mqtt.enums import CallbackAPIVersion
 
 from bench import results
-from bench.faults.fleet import Fleet, Observer, Process, percentile, python, wait_until
+from bench.faults.fleet import Fleet, Observer, Process, percentile, python
 from bench.faults.harness import Context, verdict, wait_all_closed, wait_online
+from bench.faults.health_watch import HealthWatch
 from bench.faults.stack import Stack, free_port
 
 KINDS = ("kill", "freeze", "database")
@@ -114,53 +113,6 @@ class MasterSniffer:
     def stop(self) -> None:
         self.client.loop_stop()
         self.client.disconnect()
-
-
-class HealthWatch(threading.Thread):
-    """Polls each control's `/ready` every 0.1 s; keeps the latest answer per control."""
-
-    def __init__(self, ports: dict[str, int]) -> None:
-        super().__init__(daemon=True)
-        self.ports = ports
-        self.latest: dict[str, dict[str, Any]] = {}
-        self._halt = threading.Event()
-
-    def run(self) -> None:
-        while not self._halt.wait(0.1):
-            for name, port in self.ports.items():
-                self.latest[name] = {**_ready(port), "at": time.monotonic()}
-
-    def ready_leader(self) -> tuple[str, int] | None:
-        """(control name, fencing) of the control that answers ready, if one does."""
-        for name, answer in self.latest.items():
-            if answer.get("ready"):
-                return name, int(answer.get("fencing") or 0)
-        return None
-
-    def role(self, name: str) -> str | None:
-        return self.latest.get(name, {}).get("role")
-
-    def wait(
-        self, condition: Callable[[], object], timeout: float, message: str, fleet: Fleet | None
-    ) -> float:
-        """`wait_until`, with each control's last answer in the error (what a failed CI shows)."""
-        try:
-            return wait_until(condition, timeout, message, fleet)
-        except TimeoutError as error:
-            raise TimeoutError(f"{error}; last answers: {self.latest}") from None
-
-    def stop(self) -> None:
-        self._halt.set()
-
-
-def _ready(port: int) -> dict[str, Any]:
-    try:
-        with urllib.request.urlopen(f"http://127.0.0.1:{port}/ready", timeout=0.5) as response:  # noqa: S310
-            return dict(json.loads(response.read()))
-    except urllib.error.HTTPError as error:
-        return dict(json.loads(error.read()))
-    except (OSError, ValueError):
-        return {"role": None, "ready": False}  # not answering: dead, frozen or starting
 
 
 def attribute_publishes(
@@ -273,19 +225,7 @@ def one_round(
 ) -> dict[str, Any]:
     """Inject one fault into the current leader; the seconds until a control is ready again."""
     fleet = context.fleet
-    settled: list[tuple[str, int]] = []
-
-    def one_leader_the_rest_standby() -> bool:
-        # Judged on one reading: the leader may change between rounds on its own (a starved
-        # renewal thread steps down), so "the others" are whoever does not lead at this moment.
-        now = watch.ready_leader()
-        if now is None or any(watch.role(n) != "standby" for n in controls if n != now[0]):
-            return False
-        settled[:] = [now]
-        return True
-
-    watch.wait(one_leader_the_rest_standby, 180, "a ready leader and the rest standby", fleet)
-    leader, fencing = settled[0]
+    leader, fencing = watch.wait_settled(list(controls), 180, fleet)
     process = controls[leader]
     started = time.monotonic()
     if kind == "kill":
