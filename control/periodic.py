@@ -77,7 +77,8 @@ class PeriodicWork:
             vehicle.mark_changed()
         # Counted once the vehicle has a registry row: a new vehicle's first snapshot goes
         # with the next flush, and a dispatch asked for before it would find it not online.
-        available = vehicle.is_available and vehicle.is_idle and vehicle.pk is not None
+        # The cheap tests first: a vehicle with an order is not idle, whatever else it is.
+        available = vehicle.pk is not None and vehicle.is_idle and vehicle.is_available
         if available and not vehicle.was_available:
             batch.newly_available += 1
         vehicle.was_available = available

@@ -33,8 +33,8 @@ class WaitLog:
         self, vehicle: LiveVehicle, waiting_for: list[str], now: datetime | None = None
     ) -> None:
         """Start, extend or end the vehicle's wait from one sample of whom it waits for."""
-        if vehicle.pk is None:
-            return
+        if vehicle.pk is None or not (waiting_for or vehicle.pk in self.open):
+            return  # the usual case, about once a second for every vehicle: nothing to do
         now = now or datetime.now(UTC)
         state, position = vehicle.state, vehicle.visual_position
         node_id = state.last_node_id if state is not None else ""

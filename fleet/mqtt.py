@@ -233,7 +233,13 @@ class BufferedClient(mqtt.Client):
                 header = buffer[pos]
                 if header & 0xF6 != 0x30:  # PUBLISH with QoS 0 (dup and retain may be set)
                     break
-                length, start = _remaining_length(buffer, pos + 1, end)
+                first = buffer[pos + 1]  # the remaining length: one or two bytes for a state
+                if first < 0x80:
+                    length, start = first, pos + 2
+                elif buffer[pos + 2] < 0x80:  # pos + 4 <= end: this byte is there
+                    length, start = (first & 0x7F) | (buffer[pos + 2] << 7), pos + 3
+                else:
+                    length, start = _remaining_length(buffer, pos + 1, end)
                 if length < 0 or start + length > end:
                     break  # not whole yet, or a length paho should judge
                 size = (buffer[start] << 8) | buffer[start + 1]

@@ -220,10 +220,12 @@ def test_publishes_whole_in_the_buffer_are_read_from_it_and_the_rest_the_paho_wa
         right.setblocking(False)
         client._sock = _BufferedSocket(right)
         big = b"x" * 300  # a two-byte remaining length
+        huge = b"y" * 20_000  # three bytes
         tail = _publish(b"v/split", b"second half")
         left.sendall(
             _publish(b"v/a", b"one")
             + _publish(b"v/b", big, retain=True)
+            + _publish(b"v/h", huge)
             + _publish(b"v/c", b"boom")
             + b"\xd0\x00"  # PINGRESP: paho's
             + _publish(b"v/d", b"after ping")
@@ -235,6 +237,7 @@ def test_publishes_whole_in_the_buffer_are_read_from_it_and_the_rest_the_paho_wa
         assert seen == [
             ("v/a", b"one", False),
             ("v/b", big, True),
+            ("v/h", huge, False),
             ("v/c", b"boom", False),
             ("v/d", b"after ping", False),
         ]
@@ -244,7 +247,7 @@ def test_publishes_whole_in_the_buffer_are_read_from_it_and_the_rest_the_paho_wa
         left.sendall(tail[6:] + _publish(b"v/e", b"last"))
         time.sleep(0.05)
         client.loop_read()
-        assert seen[4:] == [("v/split", b"second half", False), ("v/e", b"last", False)]
+        assert seen[5:] == [("v/split", b"second half", False), ("v/e", b"last", False)]
     finally:
         client._sock = None
         left.close()
