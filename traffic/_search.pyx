@@ -36,6 +36,7 @@ cdef struct Entry:
     double end
     long long s
     long long stage
+    double c  # the move cost so far (0 without one)
 
 
 cdef inline bint before(const Entry& a, const Entry& b) noexcept nogil:
@@ -176,6 +177,14 @@ def run(p):
     refuge_cost = p.refuge_cost
     cdef double t0 = p.t0
     cdef double h_start = p.h_start
+    # With a move cost a state is better when its arrival plus cost is smaller; the cost is
+    # kept beside (`spent`, read only when there is a cost: the default loop is unchanged).
+    cdef bint has_cost = p.move_cost is not None
+    cdef double[::1] move_cost
+    if has_cost:
+        move_cost = np.ascontiguousarray(p.move_cost, dtype=np.float64)
+    cdef unordered_map[long long, double] spent
+    cdef double c, cc
 
     cdef unordered_map[long long, double] best
     cdef unordered_map[long long, Link] parents
@@ -184,7 +193,7 @@ def run(p):
     best[start_key] = t0
     cdef vector[Entry] heap
     heap_push(heap, Entry(t0 + weight * (h_start if h_start < INF else 0.0), -t0, 0, start_key,
-                          p.deadline, p.start_state, 0))
+                          p.deadline, p.start_state, 0, 0.0))
     cdef bint have_nearest = False
     cdef double near_score = 0.0, near_t = 0.0
     cdef long long near_key = 0
@@ -202,10 +211,14 @@ def run(p):
     while heap.size():
         e = heap_pop(heap)
         t = -e.neg_t
-        key, end, s, stage = e.key, e.end, e.s, e.stage
+        key, end, s, stage, c = e.key, e.end, e.s, e.stage, e.c
         found = best.find(key)
-        if found != best.end() and (<double>best[key]) < t:
-            continue
+        if found != best.end():
+            if has_cost:
+                if best[key] + spent[key] < t + c:
+                    continue
+            elif (<double>best[key]) < t:
+                continue
         expansions += 1
         if expansions > max_expansions:
             break
@@ -224,9 +237,11 @@ def run(p):
                 child = key + span * UNIT
                 if best.find(child) == best.end():
                     best[child] = t
+                    if has_cost:
+                        spent[child] = c
                     parents[child] = Link(key, -INF)
                     pushes += 1
-                    heap_push(heap, Entry(t + cost, -t, pushes, child, end, s, stage + 1))
+                    heap_push(heap, Entry(t + c + cost, -t, pushes, child, end, s, stage + 1, c))
         elif u == goal_node[stage]:
             if stage == last and not refuge:
                 if end == INF:
@@ -235,15 +250,19 @@ def run(p):
                 t2 = t + goal_dwell[stage]
                 child = key + span * UNIT
                 found = best.find(child)
-                if t2 < end and (found == best.end() or t2 < best[child]):
+                if t2 < end and (found == best.end() or (
+                        t2 + c < best[child] + spent[child] if has_cost else t2 < best[child])):
                     best[child] = t2
+                    if has_cost:
+                        spent[child] = c
                     parents[child] = Link(key, -INF)
                     pushes += 1
                     if is_outside:
                         h = cost_to(p.tables[stage + 1], u, p.heading)
                     else:
                         h = tables[stage + 1][s]
-                    heap_push(heap, Entry(t2 + weight * h, -t2, pushes, child, end, s, stage + 1))
+                    heap_push(heap, Entry(t2 + c + weight * h, -t2, pushes, child, end, s,
+                                          stage + 1, c))
         if partial and end == INF and stage == last:
             if is_outside:
                 score = cost_to(p.tables[last], u, p.heading)
@@ -274,6 +293,7 @@ def run(p):
             node_gaps = gaps.of(v)
             seg_gaps = gaps.of(seg)
             child_base = (base + vs_) << SHIFT
+            cc = c + move_cost[lo_m + i] if has_cost and not is_outside else c
             for j in range(0, <long long>seg_gaps.size(), 2):
                 ws, we = seg_gaps[0][j], seg_gaps[0][j + 1]
                 if ws > latest:
@@ -294,12 +314,15 @@ def run(p):
                         continue
                     child = child_base + idx + 1
                     found = best.find(child)
-                    if found == best.end() or arrive < best[child]:
+                    if found == best.end() or (arrive + cc < best[child] + spent[child]
+                                               if has_cost else arrive < best[child]):
                         best[child] = arrive
+                        if has_cost:
+                            spent[child] = cc
                         parents[child] = Link(key, dep)
                         pushes += 1
-                        heap_push(heap, Entry(arrive + weight * (h if h < INF else 0.0), -arrive,
-                                              pushes, child, ve, vs_, stage))
+                        heap_push(heap, Entry(arrive + cc + weight * (h if h < INF else 0.0),
+                                              -arrive, pushes, child, ve, vs_, stage, cc))
     if partial and have_nearest and near_key != start_key:
         return _chain(parents, best, near_key), False, False
     return None

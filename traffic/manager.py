@@ -29,6 +29,7 @@ from dataclasses import replace
 
 from traffic.aside import through_traffic
 from traffic.commit import Commit, planning_state
+from traffic.congestion import FlowCost
 from traffic.footprint import ConflictSets, VehicleClass
 from traffic.layout import Layout
 from traffic.plans import Goal, Plan, Release, ReleasePolicy, Vehicle
@@ -82,6 +83,7 @@ class TrafficManager(Commit):
         switching: bool = False,
         switch_push: float = 10.0,
         switch_steps: int = 16,
+        congestion: tuple[float, float] | None = None,
     ) -> None:
         self.layout = layout
         # a re-plan may serve the next goal at the decision point (the route then ends or
@@ -137,6 +139,13 @@ class TrafficManager(Commit):
         self.switch_push = switch_push
         self.switch_steps = switch_steps
         self.switches = self.switch_pushes = self.switches_dropped = 0
+        # opt-in: (against, through) s per planned step of the others' remaining routes the
+        # other way along a move's edge, and into its end node (`traffic.congestion`)
+        self.flow_costs = (
+            [FlowCost(layout, g, against=congestion[0], through=congestion[1]) for g in self.graphs]
+            if congestion is not None
+            else None
+        )
         self._vehicles: list[Vehicle] = []
         self._index: dict[str, int] = {}
         self._waiters: dict[int, set[int]] = {}
@@ -296,11 +305,26 @@ class TrafficManager(Commit):
         t0 = max(now, v.ready_at) if v.passed == b else now + self._remaining(v, graph)
         deadline = self.table.first_other_start(start, v.idx)
         args = (graph, self.table, v.idx, start, v.headings[b], t0, deadline, goals)
+        flow = self.flow_costs[v.cls] if self.flow_costs is not None else None
         return functools.partial(
-            search, *args, partial=partial, refuge=refuge, refuge_cost=self.refuge_cost
-        )
+            search, *args, partial=partial, refuge=refuge, refuge_cost=self.refuge_cost,
+            move_cost=flow.costs(self._vehicles, v, now) if flow is not None else None,
+        )  # fmt: skip
 
     def _search(
+        self,
+        run: Callable[..., Path | None],
+        unlocked: Callable[[], AbstractContextManager[object]] | None,
+    ) -> Path | None:
+        """`run` the search (`_bounded`); with `congestion`, a search that found no complete
+        path is repeated without the cost (a cost may drop a state that a path needed, see
+        `traffic.congestion`)."""
+        path = self._bounded(run, unlocked)
+        if (path is None or not path.complete) and self.flow_costs is not None:
+            path = self._bounded(functools.partial(run, move_cost=None), unlocked) or path
+        return path
+
+    def _bounded(
         self,
         run: Callable[..., Path | None],
         unlocked: Callable[[], AbstractContextManager[object]] | None,

@@ -96,6 +96,10 @@ class ClassGraph:
         self.moves: list[list[tuple[int, int, float, int, float]]] = [
             self._moves(self.node_of[s], self.key_of[s]) for s in range(count)
         ]
+        # where each state's moves begin in the flat move order (a move cost's index)
+        self.move_offsets = [0] * (count + 1)
+        for s in range(count):
+            self.move_offsets[s + 1] = self.move_offsets[s] + len(self.moves[s])
         arrive = count  # arrive(v) = count + v, the goal "whatever the heading"
         reverse: list[tuple[int, int, float]] = []
         for v, keys in enumerate(self.states):
@@ -217,6 +221,7 @@ def search(
     refuge: bool = False,
     avoid: Collection[int] = (),
     refuge_cost: Sequence[float] | None = None,
+    move_cost: Sequence[float] | np.ndarray | None = None,
     unlocked: Callable[[], AbstractContextManager[object]] | None = None,
 ) -> Path | None:
     """The earliest-arriving path through `goals` (node, dwell) for `vehicle`, or None.
@@ -228,8 +233,11 @@ def search(
     arrival). With `refuge`, the last goal is only visited (its dwell included) and the path
     ends at the earliest reachable node, not in `avoid`, where the vehicle may stay for good
     (`Path.stops` then holds the goals only); `refuge_cost` (s per node) makes busy nodes worse
-    refuges: the refuge minimises arrival plus its cost. The loop runs compiled when
-    `traffic._speedups` is built (`make venv`), in plain Python otherwise (same result).
+    refuges: the refuge minimises arrival plus its cost. `move_cost` (s per move, flat in
+    `ClassGraph.moves` order; `traffic.congestion`) is added to the arrival where the search
+    compares and orders states: the path minimises arrival plus cost, its times stay exact.
+    The loop runs compiled when `traffic._speedups` is built (`make venv`), in plain Python
+    otherwise (same result).
 
     The compiled loop changes nothing shared and offers the GIL every few dozen expansions, so
     it runs inside `unlocked()`: the caller may let other threads at the table meanwhile (and
@@ -250,7 +258,7 @@ def search(
         graph, table, vehicle, start, heading,
         start_state if start_state >= 0 else graph.state_count,
         t0, deadline, goals, tables, h_start, partial, max_expansions, weight, refuge,
-        avoid, refuge_cost,
+        avoid, refuge_cost, move_cost=move_cost,
     )  # fmt: skip
     if unlocked is not None and LOOP is not sipp_loop:
         problem.shared = True

@@ -46,6 +46,7 @@ class Problem:
     # The compiled loop runs while other threads may use the table (`search(unlocked=...)`):
     # it must not sort the table's lists in place then (a sorted copy instead).
     shared: bool = False
+    move_cost: Any = None  # s per move, flat in `graph.moves` order (`traffic.congestion`)
 
 
 def run(p: Problem) -> Found | None:
@@ -62,17 +63,22 @@ def run(p: Problem) -> Found | None:
     start_key = p.start_state << SHIFT
     parents: dict[int, tuple[int, float]] = {start_key: (-1, -INF)}
     best: dict[int, float] = {start_key: p.t0}
+    # With a move cost a state is better when its arrival plus cost is smaller; the cost is
+    # kept beside (`spent`; 0 without a cost, which leaves every comparison as it was).
+    move_cost, offsets = p.move_cost, graph.move_offsets
+    spent: dict[int, float] = {}
+    spent_get = spent.get
     h0 = p.t0 + weight * (p.h_start if p.h_start < INF else 0.0)
-    heap = [(h0, -p.t0, 0, start_key, p.deadline, p.start_state, 0)]
+    heap = [(h0, -p.t0, 0, start_key, p.deadline, p.start_state, 0, 0.0)]
     nearest: tuple[float, float, int] | None = None
     pushes = expansions = 0
     pop, push, best_get = heapq.heappop, heapq.heappush, best.get
     partial, refuge, avoid, refuge_cost = p.partial, p.refuge, p.avoid, p.refuge_cost
     vehicle = p.vehicle
     while heap:
-        _, neg_t, _, key, end, s, stage = pop(heap)
+        _, neg_t, _, key, end, s, stage, c = pop(heap)
         t = -neg_t
-        if best_get(key, INF) < t:
+        if best_get(key, INF) + spent_get(key, 0.0) < t + c:
             continue
         expansions += 1
         if expansions > p.max_expansions:
@@ -91,9 +97,10 @@ def run(p: Problem) -> Found | None:
                 child = key + span * UNIT
                 if child not in best:
                     best[child] = t
+                    spent[child] = c
                     parents[child] = (key, -INF)
                     pushes += 1
-                    push(heap, (t + cost, -t, pushes, child, end, s, stage + 1))
+                    push(heap, (t + c + cost, -t, pushes, child, end, s, stage + 1, c))
         elif u == goals[stage][0]:
             if stage == last and not refuge:
                 if end == INF:
@@ -101,19 +108,21 @@ def run(p: Problem) -> Found | None:
             else:
                 t2 = t + goals[stage][1]
                 child = key + span * UNIT
-                if t2 < end and t2 < best_get(child, INF):
+                if t2 < end and t2 + c < best_get(child, INF) + spent_get(child, 0.0):
                     best[child] = t2
+                    spent[child] = c
                     parents[child] = (key, -INF)  # a dwell, not a move
                     pushes += 1
                     h = tables[stage + 1][s] if s != outside else cost_to(tables[stage + 1], u, hk)
-                    push(heap, (t2 + weight * h, -t2, pushes, child, end, s, stage + 1))
+                    push(heap, (t2 + c + weight * h, -t2, pushes, child, end, s, stage + 1, c))
         if partial and end == INF and stage == last:
             score = tables[last][s] if s != outside else cost_to(tables[last], u, hk)
             if nearest is None or (score, t) < nearest[:2]:
                 nearest = (score, t, key)
         table_h = tables[stage]
         base = stage * span
-        for v, seg, tau, vs_, turning in out:
+        first = offsets[s] if s != outside else -1  # (the start's own moves cost nothing)
+        for i, (v, seg, tau, vs_, turning) in enumerate(out):
             h = table_h[vs_]
             if h == INF and not partial:
                 continue
@@ -128,6 +137,7 @@ def run(p: Problem) -> Found | None:
             if seg_gaps is None:
                 seg_gaps = cache[seg] = safe_intervals(seg, vehicle)
             child_base = (base + vs_) << SHIFT
+            cc = c + move_cost[first + i] if move_cost is not None and first >= 0 else c
             for ws, we in seg_gaps:
                 if ws > latest:
                     break
@@ -143,12 +153,13 @@ def run(p: Problem) -> Found | None:
                     if dep > hi or arrive >= ve:
                         continue
                     child = child_base + idx + 1
-                    if arrive < best_get(child, INF):
+                    if arrive + cc < best_get(child, INF) + spent_get(child, 0.0):
                         best[child] = arrive
+                        spent[child] = cc
                         parents[child] = (key, dep)
                         pushes += 1
-                        f = arrive + weight * (h if h < INF else 0.0)
-                        push(heap, (f, -arrive, pushes, child, ve, vs_, stage))
+                        f = arrive + cc + weight * (h if h < INF else 0.0)
+                        push(heap, (f, -arrive, pushes, child, ve, vs_, stage, cc))
     if partial and nearest is not None and nearest[2] != start_key:
         return _chain(parents, best, nearest[2]), False, False
     return None

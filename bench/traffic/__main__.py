@@ -46,6 +46,13 @@ def main() -> None:
         "one's plan back at most this long (traffic.switching), or 'off'; default: "
         f"{scenarios.SWITCH_PUSH:g} for S3 and lifelong S2, off for S1",
     )
+    parser.add_argument(
+        "--congestion",
+        default="",
+        help="AGAINST,THROUGH seconds per planned step of the others' routes the other way "
+        "along a move's edge and into its end node (traffic.congestion), or 'off'; default: "
+        f"{','.join(f'{x:g}' for x in scenarios.S2_CONGESTION)} for lifelong S2, off otherwise",
+    )
     args = parser.parse_args()
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
@@ -59,6 +66,7 @@ def main() -> None:
                 instances=args.instances,
                 lifelong=lifelong,
                 switch_push=switch_push,
+                congestion=_congestion(args.congestion, name, lifelong),
             )
         else:
             runner = scenarios.s1 if name == "S1" else scenarios.s3
@@ -79,6 +87,7 @@ def main() -> None:
                 retime_slack=args.retime_slack,
                 retime_growth=args.retime_growth,
                 switch_push=switch_push,
+                congestion=_congestion(args.congestion, name, lifelong),
             )
         figures["quick"] = args.quick
         print(f"== {name}")
@@ -88,6 +97,16 @@ def main() -> None:
             suffix = f"_{args.tag}" if args.tag else ""
             path = write(f"traffic_{name.lower()}{suffix}", figures)
             print(f"  -> {path}")
+
+
+def _congestion(given: str, scenario: str, lifelong: bool) -> tuple[float, float] | None:
+    """The flow cost (against, through) of a run (None: off)."""
+    if given == "off":
+        return None
+    if given:
+        against, through = given.split(",")
+        return float(against), float(through)
+    return scenarios.S2_CONGESTION if scenario == "S2" and lifelong else None
 
 
 def _switch_push(given: str, scenario: str, lifelong: bool) -> float | None:

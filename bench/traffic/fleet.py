@@ -113,11 +113,13 @@ def fleet_manager(
     improve_budget: int = 0,
     improve_slack: float = 2.0,
     switch_push: float | None = None,
+    congestion: tuple[float, float] | None = None,
 ) -> TrafficManager:
     """A manager with vehicles `v0..` standing at `starts` (node id, heading).
 
     `lifelong` turns on the opt-in goal refuges and stepping aside (`traffic.aside`);
-    `switch_push` (seconds, None: off) the opt-in switching (`traffic.switching`).
+    `switch_push` (seconds, None: off) the opt-in switching (`traffic.switching`);
+    `congestion` (against, through; None: off) the opt-in flow cost (`traffic.congestion`).
     """
     manager = TrafficManager(
         layout,
@@ -136,6 +138,7 @@ def fleet_manager(
         improve_slack=improve_slack,
         switching=switch_push is not None,
         switch_push=switch_push or 0.0,
+        congestion=congestion,
     )
     for i, (node, heading) in enumerate(starts):
         manager.add_vehicle(f"v{i}", node, 0.0, heading=heading)

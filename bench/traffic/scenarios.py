@@ -48,6 +48,10 @@ REASSIGN_AFTER = 3
 # Eleventh round: S3's first 360 s rho_work 0.574 -> 0.629; I-03 1,455 -> 1,484 errands
 # (mean of three first-wave orders); S1 neither better nor worse, so off there
 SWITCH_PUSH = 10.0
+# lifelong S2 (the command line's default; `traffic.congestion`): seconds per planned step of
+# the others' remaining routes against a move (head-on) and into its end node. Fourteenth
+# round: I-03 1,464 -> 1,559 errands (mean of three first-wave orders), I-04 1,239 -> 1,252
+S2_CONGESTION = (0.5, 0.5)
 
 
 def warehouse_scenario(
@@ -63,6 +67,7 @@ def warehouse_scenario(
     retime_slack: float = 2.0,
     retime_growth: float = 0.0,
     switch_push: float | None = None,
+    congestion: tuple[float, float] | None = None,
 ) -> dict[str, Any]:
     """Vehicles start at distinct workstations and run pick -> drop orders for `hours`.
 
@@ -83,6 +88,7 @@ def warehouse_scenario(
         retime_slack=retime_slack,
         retime_growth=retime_growth,
         switch_push=switch_push,
+        congestion=congestion,
     )
     setup = time.perf_counter() - began
     # A vehicle whose tour cannot be planned now tries again after 1, 2, 4, … 30 s: on S3 a drop
@@ -118,6 +124,7 @@ def warehouse_scenario(
         retime_slack=retime_slack,
         retime_growth=retime_growth,
         switch_push=switch_push,
+        congestion=congestion,
         delay="5% of moves +5-30 s",
         setup_s=round(setup, 2),
     )
@@ -134,6 +141,7 @@ def s1(
     retime_slack: float = 2.0,
     retime_growth: float = 0.0,
     switch_push: float | None = None,
+    congestion: tuple[float, float] | None = None,
 ) -> dict[str, Any]:
     """S1: warehouse-10-20-10-2-1 pattern, 100 vehicles (rho >= 0.85, plan p95 <= 25 ms)."""
     grid = warehouse()
@@ -150,6 +158,7 @@ def s1(
         retime_slack=retime_slack,
         retime_growth=retime_growth,
         switch_push=switch_push,
+        congestion=congestion,
     )
 
 
@@ -163,6 +172,7 @@ def s3(
     retime_slack: float = 2.0,
     retime_growth: float = 0.0,
     switch_push: float | None = None,
+    congestion: tuple[float, float] | None = None,
 ) -> dict[str, Any]:
     """S3: 1,000 vehicles on a 500×140 warehouse (targets: rho >= 0.7, plan p95 <= 150 ms)."""
     grid = warehouse(block_cols=36, block_rows=45, margin=51, station_cols=8)
@@ -180,6 +190,7 @@ def s3(
         retime_slack=retime_slack,
         retime_growth=retime_growth,
         switch_push=switch_push,
+        congestion=congestion,
     )
 
 
@@ -208,6 +219,7 @@ def s2(
     instances: Sequence[str] = (),
     lifelong: bool = True,
     switch_push: float | None = None,
+    congestion: tuple[float, float] | None = None,
 ) -> dict[str, Any]:
     """S2: LoRR random-32-32-20, errands within the step limit vs best-known (target >= 60 %).
 
@@ -221,6 +233,7 @@ def s2(
         "rules": "LoRR 2023, no delays",
         "lifelong": lifelong,
         "switch_push": switch_push,
+        "congestion": congestion,
     }
     for name in names:
         instance = lorr(name)
@@ -239,6 +252,7 @@ def s2(
             improve_budget=S2_IMPROVE_BUDGET if lifelong else 0,
             improve_slack=S2_IMPROVE_SLACK,
             switch_push=switch_push,
+            congestion=congestion,
         )
         config = SimConfig(
             seed=seed,

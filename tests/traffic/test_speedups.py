@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 
 from tests.traffic.helpers import ListTasks, cells, manager
+from tests.traffic.test_congestion import dense_run
 from tests.traffic.test_planning_speed import busy_grid
 from traffic import reservations, sipp, sipp_loop, speedups
 from traffic.des import SimConfig, Simulation
@@ -75,6 +76,16 @@ def test_refuge_searches_with_avoided_nodes_and_costs_search_the_same(both: Both
     config = SimConfig(delay_probability=0.0, partial=True, finish_at_goal=True)
     Simulation(m, ListTasks(tasks), config).run(400.0)
     assert both.found > 15
+
+
+@needs_native
+@pytest.mark.parametrize("congestion", [(1.0, 0.0), (0.0, 0.5), (2.0, 2.0)])
+def test_searches_with_a_congestion_cost_search_the_same(
+    both: BothLoops, congestion: tuple[float, float]
+) -> None:
+    _, source = dense_run(congestion)
+    assert sum(source.done.values()) == 24
+    assert both.found > 30
 
 
 @needs_native
