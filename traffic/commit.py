@@ -1,14 +1,20 @@
 """Putting a searched path into the reservation table, and the checks around a search.
 
-Split from `traffic.manager` (which searches): `_commit` replaces a vehicle's unreleased steps
-with a new path's holds and releases what it can; `_fits` re-checks a path searched while the
-table was open to other threads; `_remaining` is the time a vehicle still drives to its
-decision point. `TrafficManager` inherits them.
+Split from `traffic.manager` (which prepares the searches): `_search` runs one, again at a
+larger weight or without the congestion cost when it found no complete path; `_commit`
+replaces a vehicle's unreleased steps with a new path's holds and releases what it can; `_fits`
+re-checks a path searched while the table was open to other threads; `_remaining` is the time
+a vehicle still drives to its decision point. `TrafficManager` inherits them.
 """
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
+from contextlib import AbstractContextManager
+
 from traffic.aside import Lifelong
+from traffic.congestion import FlowCost
 from traffic.plans import NO_HOLD, Release, Vehicle
 from traffic.reservations import INF, Hold
 from traffic.sipp import ClassGraph, Path
@@ -19,6 +25,39 @@ class Commit(Lifelong):
 
     _segment: dict[tuple[int, int], int]
     _length: dict[tuple[int, int], float]
+    max_expansions: int
+    weight: float
+    quick_search: tuple[int, float] | None
+    flow_costs: list[FlowCost] | None
+
+    def _search(
+        self,
+        run: Callable[..., Path | None],
+        unlocked: Callable[[], AbstractContextManager[object]] | None,
+    ) -> Path | None:
+        """`run` the search (`_bounded`); with `congestion`, a search that found no complete
+        path is repeated without the cost (a cost may drop a state that a path needed, see
+        `traffic.congestion`)."""
+        path = self._bounded(run, unlocked)
+        if (path is None or not path.complete) and self.flow_costs is not None:
+            path = self._bounded(functools.partial(run, move_cost=None), unlocked) or path
+        return path
+
+    def _bounded(
+        self,
+        run: Callable[..., Path | None],
+        unlocked: Callable[[], AbstractContextManager[object]] | None,
+    ) -> Path | None:
+        """`run` the search, and with `quick_search` once more at its larger weight if the
+        first search found no complete path within its expansions."""
+        if self.quick_search is None:
+            return run(max_expansions=self.max_expansions, weight=self.weight, unlocked=unlocked)
+        cap, fallback = self.quick_search
+        path = run(max_expansions=cap, weight=self.weight, unlocked=unlocked)
+        if path is None or not path.complete:
+            again = run(max_expansions=self.max_expansions, weight=fallback, unlocked=unlocked)
+            path = again or path
+        return path
 
     def _fits(self, v: Vehicle, path: Path, since: int) -> bool:
         """Whether `path`, searched from table clock `since` on, still fits from `v`'s decision

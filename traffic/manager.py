@@ -311,35 +311,6 @@ class TrafficManager(Commit):
             move_cost=flow.costs(self._vehicles, v, now) if flow is not None else None,
         )  # fmt: skip
 
-    def _search(
-        self,
-        run: Callable[..., Path | None],
-        unlocked: Callable[[], AbstractContextManager[object]] | None,
-    ) -> Path | None:
-        """`run` the search (`_bounded`); with `congestion`, a search that found no complete
-        path is repeated without the cost (a cost may drop a state that a path needed, see
-        `traffic.congestion`)."""
-        path = self._bounded(run, unlocked)
-        if (path is None or not path.complete) and self.flow_costs is not None:
-            path = self._bounded(functools.partial(run, move_cost=None), unlocked) or path
-        return path
-
-    def _bounded(
-        self,
-        run: Callable[..., Path | None],
-        unlocked: Callable[[], AbstractContextManager[object]] | None,
-    ) -> Path | None:
-        """`run` the search, and with `quick_search` once more at its larger weight if the
-        first search found no complete path within its expansions."""
-        if self.quick_search is None:
-            return run(max_expansions=self.max_expansions, weight=self.weight, unlocked=unlocked)
-        cap, fallback = self.quick_search
-        path = run(max_expansions=cap, weight=self.weight, unlocked=unlocked)
-        if path is None or not path.complete:
-            again = run(max_expansions=self.max_expansions, weight=fallback, unlocked=unlocked)
-            path = again or path
-        return path
-
     # -- housekeeping -------------------------------------------------------------------------
 
     def tick(self, now: float, *, budget: int = 2) -> list[Release]:

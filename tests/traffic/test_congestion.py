@@ -7,7 +7,12 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tests.traffic.helpers import ListTasks, cells, manager
-from tests.traffic.test_deadlock_property import CheckedSimulation, scenarios
+from tests.traffic.test_deadlock_property import (
+    CheckedSimulation,
+    assert_all_done_safely,
+    delayed,
+    scenarios,
+)
 from traffic import sipp
 from traffic.congestion import FlowCost
 from traffic.des import SimConfig, Simulation
@@ -147,16 +152,6 @@ def test_random_tasks_and_delays_with_costs_never_deadlock(  # type: ignore[no-u
 ):
     layout, starts, tasks = scenario
     source = ListTasks(tasks)
-    config = SimConfig(
-        delay_probability=delay_probability,
-        delay_range=(1.0, 15.0),
-        seed=seed,
-        stall_after=1000.0,
-        check_every=5.0,
-    )
     m = manager(layout, starts, congestion=congestion)
-    stats = CheckedSimulation(m, source, config).run(3000.0)
-    assert source.done == {name: len(todo) for name, todo in tasks.items()}
-    assert stats.collisions == 0
-    assert stats.wait_cycles == 0
-    assert stats.stalls == 0
+    stats = CheckedSimulation(m, source, delayed(seed, delay_probability)).run(3000.0)
+    assert_all_done_safely(stats, source, tasks)

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from tests.traffic.helpers import ListTasks, manager
 from tests.traffic.test_adg import released_conflicts
-from traffic.des import SimConfig, Simulation
+from traffic.des import SimConfig, SimStats, Simulation
 from traffic.layout import Layout
 from traffic.plans import Goal
 
@@ -70,15 +70,25 @@ class CheckedSimulation(Simulation):
 def test_random_tasks_and_delays_never_deadlock(scenario, seed, delay_probability):  # type: ignore[no-untyped-def]
     layout, starts, tasks = scenario
     source = ListTasks(tasks)
-    config = SimConfig(
+    sim = CheckedSimulation(manager(layout, starts), source, delayed(seed, delay_probability))
+    assert_all_done_safely(sim.run(3000.0), source, tasks)
+
+
+def delayed(seed: int, delay_probability: float) -> SimConfig:
+    """The properties' executor settings: delays of 1-15 s, stalls counted after 1,000 s."""
+    return SimConfig(
         delay_probability=delay_probability,
         delay_range=(1.0, 15.0),
         seed=seed,
         stall_after=1000.0,
         check_every=5.0,
     )
-    sim = CheckedSimulation(manager(layout, starts), source, config)
-    stats = sim.run(3000.0)
+
+
+def assert_all_done_safely(
+    stats: SimStats, source: ListTasks, tasks: dict[str, list[list[Goal]]]
+) -> None:
+    """Every task finished, with no collision, wait-for cycle or stall."""
     assert source.done == {name: len(todo) for name, todo in tasks.items()}
     assert stats.collisions == 0
     assert stats.wait_cycles == 0

@@ -15,7 +15,7 @@ from bench.traffic.fleet import WarehouseTasks, fleet_manager, node_id
 from bench.traffic.maps import warehouse
 from tests.traffic.helpers import ListTasks, manager
 from tests.traffic.test_adg import released_conflicts
-from tests.traffic.test_deadlock_property import scenarios
+from tests.traffic.test_deadlock_property import assert_all_done_safely, delayed, scenarios
 from traffic.des import SimConfig, Simulation
 from traffic.layout import Layout
 from traffic.manager import TrafficManager
@@ -163,19 +163,9 @@ def test_random_delays_with_switching_never_collide_or_deadlock(  # type: ignore
 ):
     layout, starts, tasks = scenario
     source = ListTasks(tasks)
-    config = SimConfig(
-        delay_probability=delay_probability,
-        delay_range=(1.0, 15.0),
-        seed=seed,
-        stall_after=1000.0,
-        check_every=5.0,
-    )
     m = manager(layout, starts, switching=True, switch_push=push, policy=ReleasePolicy(4, 4.0))
-    stats = ScheduleChecked(m, source, config).run(3000.0)
-    assert source.done == {name: len(todo) for name, todo in tasks.items()}
-    assert stats.collisions == 0
-    assert stats.wait_cycles == 0
-    assert stats.stalls == 0
+    stats = ScheduleChecked(m, source, delayed(seed, delay_probability)).run(3000.0)
+    assert_all_done_safely(stats, source, tasks)
 
 
 @settings(
