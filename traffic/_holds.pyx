@@ -74,7 +74,7 @@ cdef inline void _mark(set marks, tuple conflicts) except *:
         marks.add(r)
 
 
-def propagate(vehicles, table, graphs, pushes):
+def propagate(vehicles, table, graphs, pushes, double leave=-1.0):
     """Apply pushes (time, vehicle, index: no departure from that index before time); the
     number of steps moved. `traffic.timing.propagate`, step for step: steps in the order of
     their departure before the call, the largest push of a step first (a heap of C structs
@@ -85,7 +85,7 @@ def propagate(vehicles, table, graphs, pushes):
     cdef set unsorted = table.unsorted, stale = table._stale
     cdef list blocked = table.blocked
     cdef long long moved = 0, idx, i, last
-    cdef double t, arrive, ready, seconds
+    cdef double t, arrive, ready, seconds, left, end
     for t, idx, i in pushes:
         item.key, item.minus = fleet[idx].depart[i], -t
         item.vehicle, item.index = idx, i
@@ -117,9 +117,12 @@ def propagate(vehicles, table, graphs, pushes):
                         hold.key = hold.start
                         _mark(unsorted, hold.conflicts)
             arrivals[i + 1] = arrive
-            for hold in (edge, <Hold?>node_holds[i]):
-                if hold.end < arrive:
-                    hold.end = arrive
+            # a node hold ends on arrival at the next node, or (grid rules) `leave` s after
+            # the departure (`traffic.plans.node_hold_end`)
+            left = arrive if leave < 0 else t + leave
+            for hold, end in ((edge, arrive), (<Hold?>node_holds[i], left)):
+                if hold.end < end:
+                    hold.end = end
                     _mark(stale, hold.conflicts)  # ReservationTable.ended
                     _push_followers(fleet, blocked, unsorted, hold, idx, heap)
             moved += 1

@@ -180,6 +180,7 @@ def run(p):
     # With a move cost a state is better when its arrival plus cost is smaller; the cost is
     # kept beside (`spent`, read only when there is a cost: the default loop is unchanged).
     cdef bint has_cost = p.move_cost is not None
+    cdef double leave = p.leave  # grid rules (>= 0): s a node stays held after the departure
     cdef double[::1] move_cost
     if has_cost:
         move_cost = np.ascontiguousarray(p.move_cost, dtype=np.float64)
@@ -287,7 +288,7 @@ def run(p):
             if h == INF and not partial:
                 continue
             earliest = t + turning
-            latest = end - tau
+            latest = end - (tau if leave < 0 else leave)  # u is held until then
             if earliest > latest:
                 continue
             node_gaps = gaps.of(v)

@@ -156,6 +156,7 @@ class Lifelong(Execution):
             refuge=True,
             avoid=avoid,
             refuge_cost=self.refuge_cost,
+            leave=self.leave,
         )
         if path is None or len(path.nodes) == 1:
             return []

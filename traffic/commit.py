@@ -15,7 +15,7 @@ from contextlib import AbstractContextManager
 
 from traffic.aside import Lifelong
 from traffic.congestion import FlowCost
-from traffic.plans import NO_HOLD, Release, Vehicle
+from traffic.plans import NO_HOLD, Release, Vehicle, node_hold_end
 from traffic.reservations import INF, Hold
 from traffic.sipp import ClassGraph, Path
 
@@ -65,12 +65,11 @@ class Commit(Lifelong):
         before another vehicle's queued hold there (what the search checked, asked again of
         the lists that changed since)."""
         table, me, nodes = self.table, v.idx, path.nodes
-        leave = path.arrive[1] if len(nodes) > 1 else INF
-        if table.changed_since(nodes[0], since) and leave > table.first_other_start(nodes[0], me):
+        ends = self._node_ends(path)
+        if table.changed_since(nodes[0], since) and ends[0] > table.first_other_start(nodes[0], me):
             return False
         for j in range(1, len(nodes)):
-            enter = path.depart[j - 1]
-            left = path.arrive[j + 1] if j + 1 < len(nodes) else INF
+            enter, left = path.depart[j - 1], ends[j]
             segment = self._segment[(nodes[j - 1], nodes[j])]
             for resource, end in ((segment, path.arrive[j]), (nodes[j], left)):
                 if table.changed_since(resource, since) and not table.admits(
@@ -78,6 +77,14 @@ class Commit(Lifelong):
                 ):
                     return False
         return True
+
+    def _node_ends(self, path: Path) -> list[float]:
+        """When the hold on each node of `path` ends (`plans.node_hold_end`; inf at the last)."""
+        last = len(path.nodes) - 1
+        return [
+            node_hold_end(path.depart[j], path.arrive[j + 1], self.leave) if j < last else INF
+            for j in range(last + 1)
+        ]
 
     def _remaining(self, v: Vehicle, graph: ClassGraph) -> float:
         """Seconds the vehicle still needs to its decision point, driving without waiting."""
@@ -115,13 +122,14 @@ class Commit(Lifelong):
             v.restart(path.nodes[0])
             v.last_progress = now  # a new route: no progress owed on it yet (not stalled)
             b = 0
-        v.node_holds[b].end = path.arrive[1] if len(path.nodes) > 1 else INF
+        ends = self._node_ends(path)
+        v.node_holds[b].end = ends[0]
         table.ended(v.node_holds[b])
         for j in range(1, len(path.nodes)):
             i = b + j
             u, n = path.nodes[j - 1], path.nodes[j]
             seg = self._segment[(u, n)]
-            dep, end = path.depart[j - 1], path.arrive[j + 1] if j + 1 < len(path.nodes) else INF
+            dep, end = path.depart[j - 1], ends[j]
             edge = Hold(v.idx, seg, i, dep, path.arrive[j], conflicts.of(v.cls, seg))
             node = Hold(v.idx, n, i, dep, end, conflicts.of(v.cls, n))
             table.add(edge)

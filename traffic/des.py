@@ -1,14 +1,12 @@
 """A discrete-event execution of traffic plans, faster than real time (tests and benchmarks).
 
 Vehicles drive only what the manager released: one step at a time (turn on the spot, drive the
-edge), optionally delayed at random, and report each node reached with `on_progress`. When a
-vehicle ends its route it gets its next task from a `Tasks` source. Independently of the
-manager's bookkeeping the executor tracks what each vehicle physically occupies (its node, and
-while moving the segment and the next node) and counts a collision whenever a vehicle starts a
-move into resources that conflict with another vehicle's. It also counts wait-for cycles and
-stalls (a vehicle with work left that has not moved for `stall_after` seconds; see
-`traffic.des_watch`). What a run is given and measures is in `traffic.des_records`, the
-free-flow time that ratios are measured against in `traffic.free_flow`.
+edge), optionally delayed at random, and report each node reached with `on_progress` (under
+grid rules also each node left, `on_leave`, after the turn and any delay: a delay is a stay).
+When a vehicle ends its route it gets its next task from a `Tasks` source. Independently of
+the manager's bookkeeping it counts collisions, wait-for cycles and stalls (`traffic.des_watch`).
+What a run is given and measures is in `traffic.des_records`, the free-flow time that ratios
+are measured against in `traffic.free_flow`.
 """
 
 from __future__ import annotations
@@ -20,12 +18,12 @@ from collections.abc import Sequence
 from typing import cast
 
 from traffic.des_records import ReassigningTasks, SimConfig, SimStats, TaskRecord, Tasks
-from traffic.des_watch import StallWatch
+from traffic.des_watch import Occupancy, StallWatch
 from traffic.free_flow import free_flow_time
 from traffic.manager import NoPlanError, TrafficManager
 from traffic.plans import Goal, Plan, Release
 
-MOVE, RETRY, CHECK = 0, 1, 2
+MOVE, RETRY, CHECK, LEAVE = 0, 1, 2, 3
 
 
 class _Car:
@@ -79,7 +77,7 @@ class Simulation:
             for i, name in enumerate(manager.vehicle_ids)
         ]
         self._by_name = {c.name: c for c in self._cars}
-        self._occupant: dict[int, set[int]] = {}
+        self._bodies = Occupancy(manager.conflicts)
         self._watch = StallWatch(manager, self._cars, self.stats, config.stall_after)
         for car in self._cars:
             node = manager.vehicle(car.name).route[-1]
@@ -98,6 +96,8 @@ class Simulation:
                 self._arrive(self._cars[idx])
             elif kind == RETRY:
                 self._try_plan(self._cars[idx])
+            elif kind == LEAVE:
+                self._leave(self._cars[idx])
             elif idx == -1:
                 self._watch.check(self.now)
                 self._push(self.now + self.config.check_every, CHECK, -1)
@@ -268,20 +268,37 @@ class Simulation:
         self._stop_waiting(car)
         graph = manager.graphs[v.cls]
         u, n = v.route[p], v.route[p + 1]
-        duration = max(0.0, v.ready_at - self.now) + graph.turn(v.headings[p], v.headings[p + 1])
-        duration += graph.travel[(u, n)]
+        before = max(0.0, v.ready_at - self.now) + graph.turn(v.headings[p], v.headings[p + 1])
         config = self.config
         if car.rng.random() < config.delay_probability:
             extra = car.rng.uniform(*config.delay_range)
-            duration += extra
+            before += extra
             car.delay += extra
             self.stats.delays += 1
+        car.moving = True
+        self.stats.moves += 1
+        if manager.leave >= 0:  # grid rules: u is left when the drive starts, after the turn
+            if before > 0:
+                self._push(self.now + before, LEAVE, car.idx)
+            else:
+                self._leave(car)
+            return
         edge = v.edge_holds[p + 1]
         assert edge is not None  # every step after the first has its segment hold
         self._occupy(car, (u, edge.resource, n))
-        car.moving = True
-        self.stats.moves += 1
-        self._push(self.now + duration, MOVE, car.idx)
+        self._push(self.now + before + graph.travel[(u, n)], MOVE, car.idx)
+
+    def _leave(self, car: _Car) -> None:
+        """Grid rules: the vehicle drives off its node (a delay, as any stay, came before)."""
+        manager = self.manager
+        v = manager.vehicle(car.name)
+        p = v.passed
+        u, n = v.route[p], v.route[p + 1]
+        edge = v.edge_holds[p + 1]
+        assert edge is not None
+        self._occupy(car, (edge.resource, n))
+        self._push(self.now + manager.graphs[v.cls].travel[(u, n)], MOVE, car.idx)
+        self._apply(manager.on_leave(car.name, self.now))
 
     def _arrive(self, car: _Car) -> None:
         manager = self.manager
@@ -370,18 +387,8 @@ class Simulation:
             self._next_task(car)
 
     def _occupy(self, car: _Car, resources: tuple[int, ...]) -> None:
-        occupant = self._occupant
-        for r in car.occupied:
-            occupant[r].discard(car.idx)
         cls = self.manager.vehicle(car.name).cls
-        conflicts = self.manager.conflicts
-        for r in resources:
-            for other in conflicts.of(cls, r):
-                for w in occupant.get(other, ()):
-                    if w != car.idx:
-                        self.stats.collisions += 1
-        for r in resources:
-            occupant.setdefault(r, set()).add(car.idx)
+        self.stats.collisions += self._bodies.move(car.idx, cls, car.occupied, resources)
         car.occupied = resources
 
 

@@ -1,4 +1,9 @@
-"""The safety net of a discrete-event run: wait-for cycles, and stalls with their wait-for chains.
+"""The safety net of a discrete-event run: collisions, wait-for cycles, and stalls with their
+wait-for chains.
+
+`Occupancy` tracks what each vehicle physically occupies, independently of the manager's
+bookkeeping, and counts a collision whenever a vehicle starts to occupy resources that
+conflict with another vehicle's.
 
 A vehicle that has not moved for `stall_after` seconds while work is left is a **stall** only if
 the vehicle at the end of its wait-for chain has not moved for that long either; a long wait
@@ -13,8 +18,31 @@ from collections.abc import Sequence
 from typing import Protocol
 
 from traffic.des_records import SimStats
+from traffic.footprint import ConflictSets
 from traffic.manager import TrafficManager
 from traffic.plans import Goal
+
+
+class Occupancy:
+    """The resources each vehicle physically occupies (its node; while it drives the segment
+    and the next node), and the collisions when one starts to occupy another's."""
+
+    def __init__(self, conflicts: ConflictSets) -> None:
+        self.conflicts = conflicts
+        self._occupant: dict[int, set[int]] = {}
+
+    def move(self, car: int, cls: int, before: tuple[int, ...], now: tuple[int, ...]) -> int:
+        """Vehicle `car` (class `cls`) leaves `before` for `now`: the collisions this makes."""
+        occupant = self._occupant
+        for r in before:
+            occupant[r].discard(car)
+        collisions = 0
+        for r in now:
+            for other in self.conflicts.of(cls, r):
+                collisions += sum(1 for w in occupant.get(other, ()) if w != car)
+        for r in now:
+            occupant.setdefault(r, set()).add(car)
+        return collisions
 
 
 class WatchedCar(Protocol):

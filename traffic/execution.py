@@ -2,7 +2,8 @@
 
 Split from `traffic.manager` (the planning side): `on_progress` runs for every state message
 and costs microseconds. Step i of a route (i >= 1) holds the segment from node i-1 to node i
-(cleared when the vehicle reports node i) and node i (cleared when it reports node i+1). Base
+(cleared when the vehicle reports node i) and node i (cleared when it reports node i+1, or
+under grid rules when it leaves node i: `on_leave`). Base
 release extends over the longest prefix whose holds have no other vehicle queued ahead (see
 `traffic.reservations`), capped by the `ReleasePolicy`. A vehicle stopped by another one's hold
 is noted as its waiter and re-checked when that vehicle progresses or is planned anew; with
@@ -38,7 +39,8 @@ class Execution(Switching):
             if edge is not None:
                 table.remove(edge)
         for i in range(v.passed, passed):
-            table.remove(v.node_holds[i])
+            if i != v.left:  # (grid rules: cleared on leaving)
+                table.remove(v.node_holds[i])
         v.passed = passed
         v.last_progress = now
         for goal, stop in zip(v.goals, v.stops, strict=True):
@@ -50,6 +52,19 @@ class Execution(Switching):
             releases.append(own)
         releases.extend(self._wake(v.idx, now))
         return releases
+
+    def on_leave(self, vehicle_id: str, now: float) -> list[Release]:
+        """Grid rules: the vehicle sets off from its last reported node along its base; the
+        node's hold is cleared now (not when the next node is reached), so a vehicle queued
+        for it may follow at once. Returns the base extensions this caused; nothing without
+        grid rules or when the vehicle has no base to drive on."""
+        v = self.vehicle(vehicle_id)
+        p = v.passed
+        if self.leave < 0 or p >= v.base or v.left == p:
+            return []
+        self.table.remove(v.node_holds[p])
+        v.left = p
+        return self._wake(v.idx, now)
 
     def _extend(self, v: Vehicle, now: float) -> Release | None:
         """Extend the base over the longest releasable prefix within the policy's caps."""

@@ -111,6 +111,18 @@ class ConflictSets:
                         found[r].add(r2)
             self.sets.append([tuple(sorted(s)) for s in found])
 
+    @classmethod
+    def cells(cls, layout: Layout, classes: Sequence[VehicleClass]) -> ConflictSets:
+        """Grid rules (LoRR): every resource conflicts only with itself. A node is one cell
+        that one vehicle may occupy, a segment is shared by both directions (no swapping);
+        a vehicle may enter a cell that another one is leaving (`TrafficManager(
+        grid_rules=True)` clears a node hold on leaving)."""
+        sets = cls.__new__(cls)
+        sets.classes = tuple(classes)
+        own: list[tuple[int, ...]] = [(r,) for r in range(layout.resource_count)]
+        sets.sets = [own for _ in sets.classes]
+        return sets
+
     def of(self, vehicle_class: int, resource: int) -> tuple[int, ...]:
         """The resources that `resource` (used by class index `vehicle_class`) conflicts with."""
         return self.sets[vehicle_class][resource]

@@ -32,7 +32,7 @@ from traffic.commit import Commit, planning_state
 from traffic.congestion import FlowCost
 from traffic.footprint import ConflictSets, VehicleClass
 from traffic.layout import Layout
-from traffic.plans import Goal, Plan, Release, ReleasePolicy, Vehicle
+from traffic.plans import GRID_LEAVE, Goal, Plan, Release, ReleasePolicy, Vehicle
 from traffic.reservations import INF, Hold, ReservationTable
 from traffic.sipp import ANY_HEADING, ClassGraph, Path, heading_key, search
 from traffic.timing import lower_bounds, propagate
@@ -84,6 +84,7 @@ class TrafficManager(Commit):
         switch_push: float = 10.0,
         switch_steps: int = 16,
         congestion: tuple[float, float] | None = None,
+        grid_rules: bool = False,
     ) -> None:
         self.layout = layout
         # a re-plan may serve the next goal at the decision point (the route then ends or
@@ -92,7 +93,12 @@ class TrafficManager(Commit):
         self.replan_to_base = replan_to_base
         self.classes = tuple(classes)
         self.policy = policy or ReleasePolicy()
-        self.conflicts = conflicts or ConflictSets(layout, self.classes)
+        # opt-in, grid rules (LoRR, S2): cells instead of footprints, and a node is held
+        # until `GRID_LEAVE` s after its vehicle leaves it (`on_leave`), not until the vehicle
+        # reaches the next node: a vehicle may follow one cell behind another
+        self.leave = GRID_LEAVE if grid_rules else -1.0
+        cells = ConflictSets.cells if grid_rules else ConflictSets
+        self.conflicts = conflicts or cells(layout, self.classes)
         self.graphs = [ClassGraph(layout, c) for c in self.classes]
         self.table = ReservationTable(layout.resource_count)
         self.max_expansions = max_expansions
@@ -309,6 +315,7 @@ class TrafficManager(Commit):
         return functools.partial(
             search, *args, partial=partial, refuge=refuge, refuge_cost=self.refuge_cost,
             move_cost=flow.costs(self._vehicles, v, now) if flow is not None else None,
+            leave=self.leave,
         )  # fmt: skip
 
     # -- housekeeping -------------------------------------------------------------------------
@@ -335,7 +342,7 @@ class TrafficManager(Commit):
             bound = lower_bounds(v, self.graphs[v.cls], now, self.retime_slack, self.retime_growth)
             if bound is not None:
                 pushes.append((bound[0], v.idx, bound[1]))
-        propagate(self._vehicles, self.table, self.graphs, pushes)
+        propagate(self._vehicles, self.table, self.graphs, pushes, self.leave)
         waiting = sorted(
             (v.blocked_since, v.idx)
             for v in self._vehicles

@@ -9,6 +9,17 @@ from traffic.layout import Layout
 from traffic.reservations import INF, Hold
 
 NO_HOLD = 1 << 62  # a route index no route reaches
+# s a node stays held after its vehicle leaves it under grid rules (`TrafficManager(
+# grid_rules=True)`): more than 0, so a follower always leaves after the vehicle it follows
+# (a ring of vehicles each entering the node the next one leaves is never planned: in
+# execution each would wait for the next to leave first)
+GRID_LEAVE = 0.01
+
+
+def node_hold_end(depart: float, arrive_next: float, leave: float) -> float:
+    """When a node hold ends: on reaching the next node (`leave` < 0: the footprint clears the
+    node only then), or under grid rules `leave` s after leaving the node."""
+    return arrive_next if leave < 0 else depart + leave
 
 
 @dataclass(frozen=True)
@@ -90,6 +101,7 @@ class Vehicle:
         self.static = False
         self.last_progress = now
         self.hold_at = NO_HOLD  # the base stops at this route index (goal_refuge: the last goal)
+        self.left = -1  # grid rules: the route index it left (node hold cleared on leaving)
 
     def restart(self, node: int) -> None:
         """Begin a new route (a new VDA 5050 order) at `node`, where the vehicle stands."""
@@ -102,6 +114,7 @@ class Vehicle:
             park.index = 0
         self.passed = self.base = self.first_index = 0
         self.hold_at = NO_HOLD
+        self.left = -1
 
     def truncate(self, last: int) -> None:
         """Keep route indices 0..last (a new horizon follows)."""

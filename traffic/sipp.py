@@ -3,7 +3,8 @@
 The search state is (node, heading, safe interval, goal stage); its value is the earliest arrival
 in that interval. A move u -> v departing at t and arriving at t + tau needs:
 
-- the vehicle's interval at u to last until t + tau (it occupies u until it reaches v);
+- the vehicle's interval at u to last until t + tau (it occupies u until it reaches v; under
+  grid rules, `leave` >= 0, only until t + leave);
 - the segment u-v to be free during [t, t + tau];
 - v to be free from t on (the step into v is claimed when the vehicle sets off).
 
@@ -222,6 +223,7 @@ def search(
     avoid: Collection[int] = (),
     refuge_cost: Sequence[float] | None = None,
     move_cost: Sequence[float] | np.ndarray | None = None,
+    leave: float = -1.0,
     unlocked: Callable[[], AbstractContextManager[object]] | None = None,
 ) -> Path | None:
     """The earliest-arriving path through `goals` (node, dwell) for `vehicle`, or None.
@@ -236,6 +238,7 @@ def search(
     refuges: the refuge minimises arrival plus its cost. `move_cost` (s per move, flat in
     `ClassGraph.moves` order; `traffic.congestion`) is added to the arrival where the search
     compares and orders states: the path minimises arrival plus cost, its times stay exact.
+    With `leave` >= 0 (grid rules) a node is held only until `leave` s after the departure.
     The loop runs compiled when `traffic._speedups` is built (`make venv`), in plain Python
     otherwise (same result).
 
@@ -258,7 +261,7 @@ def search(
         graph, table, vehicle, start, heading,
         start_state if start_state >= 0 else graph.state_count,
         t0, deadline, goals, tables, h_start, partial, max_expansions, weight, refuge,
-        avoid, refuge_cost, move_cost=move_cost,
+        avoid, refuge_cost, move_cost=move_cost, leave=leave,
     )  # fmt: skip
     if unlocked is not None and LOOP is not sipp_loop:
         problem.shared = True

@@ -47,6 +47,7 @@ class Problem:
     # it must not sort the table's lists in place then (a sorted copy instead).
     shared: bool = False
     move_cost: Any = None  # s per move, flat in `graph.moves` order (`traffic.congestion`)
+    leave: float = -1.0  # grid rules (>= 0): s a node stays held after the departure
 
 
 def run(p: Problem) -> Found | None:
@@ -74,7 +75,7 @@ def run(p: Problem) -> Found | None:
     pushes = expansions = 0
     pop, push, best_get = heapq.heappop, heapq.heappush, best.get
     partial, refuge, avoid, refuge_cost = p.partial, p.refuge, p.avoid, p.refuge_cost
-    vehicle = p.vehicle
+    vehicle, leave = p.vehicle, p.leave
     while heap:
         _, neg_t, _, key, end, s, stage, c = pop(heap)
         t = -neg_t
@@ -127,7 +128,7 @@ def run(p: Problem) -> Found | None:
             if h == INF and not partial:
                 continue
             earliest = t + turning
-            latest = end - tau
+            latest = end - (tau if leave < 0 else leave)  # u is held until then
             if earliest > latest:
                 continue
             node_gaps = cache.get(v)

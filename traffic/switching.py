@@ -44,7 +44,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from traffic.plans import Vehicle
+from traffic.plans import Vehicle, node_hold_end
 from traffic.queries import FleetQueries
 from traffic.reservations import INF, Hold
 from traffic.sipp import ClassGraph
@@ -62,6 +62,7 @@ class Switching(FleetQueries):
 
     graphs: list[ClassGraph]
     switching: bool
+    leave: float  # grid rules (>= 0): s a node stays held after its vehicle leaves it
     # s: the most a switch may push back the plan of a vehicle that goes behind (0: only
     # switches that fit before the others' plans as they are)
     switch_push: float
@@ -89,7 +90,7 @@ class Switching(FleetQueries):
         if pushes is None:
             return False
         if pushes:
-            propagate(self._vehicles, self.table, self.graphs, pushes)
+            propagate(self._vehicles, self.table, self.graphs, pushes, self.leave)
             self.switch_pushes += 1
         if not self._fits_ahead(w, k, times):
             self.switches_dropped += bool(pushes)
@@ -147,7 +148,7 @@ class Switching(FleetQueries):
         for it): its waiting node's hold must not overlap the stretch.
         """
         table, me = self.table, w.idx
-        spans = list(_spans(w, k, times))
+        spans = list(_spans(w, k, times, self.leave))
         behind = {late.idx}
         for hold, start, end in spans:
             for other in table.blocked[hold.resource]:
@@ -212,7 +213,8 @@ class Switching(FleetQueries):
         one of w's new holds on a conflicting resource."""
         waiting = v.node_holds[j - 1]
         leaves = pushes.get((v.idx, j - 1), v.depart[j - 1])
-        end = max(waiting.end, leaves + self.graphs[v.cls].travel[(v.route[j - 1], v.route[j])])
+        arrives = leaves + self.graphs[v.cls].travel[(v.route[j - 1], v.route[j])]
+        end = max(waiting.end, node_hold_end(leaves, arrives, self.leave))
         return any(
             hold.resource in waiting.conflicts and waiting.key < e and end > s
             for hold, s, e in spans
@@ -222,7 +224,7 @@ class Switching(FleetQueries):
         """Whether w's stretch at `times` overlaps no other vehicle's hold, and its first step
         then has nobody queued ahead (so w leaves at once)."""
         table, me = self.table, w.idx
-        for hold, start, end in _spans(w, k, times):
+        for hold, start, end in _spans(w, k, times, self.leave):
             if not table.admits(hold.resource, me, start, end):
                 return False
             if hold.index == w.base + 1 and any(
@@ -234,7 +236,7 @@ class Switching(FleetQueries):
     def _retime_stretch(self, w: Vehicle, k: int, times: Schedule) -> None:
         """Give w's stretch its new times and queue its holds again by their new start."""
         table, b = self.table, w.base
-        spans = list(_spans(w, k, times))
+        spans = list(_spans(w, k, times, self.leave))
         for hold, _, _ in spans:
             table.remove(hold)
         for hold, start, end in spans:
@@ -246,7 +248,7 @@ class Switching(FleetQueries):
             w.depart[b + n] = departs[n]
             w.arrive[b + n + 1] = arrives[n]
         here = w.node_holds[b]
-        here.end = w.arrive[b + 1]
+        here.end = node_hold_end(w.depart[b], w.arrive[b + 1], self.leave)
         table.ended(here)
 
 
@@ -271,9 +273,11 @@ def _earliest(w: Vehicle, graph: ClassGraph, k: int, now: float) -> Schedule | N
     return departs, arrives
 
 
-def _spans(w: Vehicle, k: int, times: Schedule) -> Iterator[tuple[Hold, float, float]]:
+def _spans(
+    w: Vehicle, k: int, times: Schedule, leave: float
+) -> Iterator[tuple[Hold, float, float]]:
     """(hold, new start, new end) of each hold of w's stretch b+1..k at `times` (the node
-    hold at k keeps its end: w leaves k as planned)."""
+    hold at k keeps its end: w leaves k as planned; `leave` as in `plans.node_hold_end`)."""
     departs, arrives = times
     b = w.base
     for i in range(b + 1, k + 1):
@@ -282,4 +286,5 @@ def _spans(w: Vehicle, k: int, times: Schedule) -> Iterator[tuple[Hold, float, f
         assert edge is not None  # every step after the first has its segment hold
         yield edge, departs[n], arrives[n]
         node = w.node_holds[i]
-        yield node, departs[n], (arrives[n + 1] if i < k else node.end)
+        end = node_hold_end(departs[n + 1], arrives[n + 1], leave) if i < k else node.end
+        yield node, departs[n], end

@@ -20,7 +20,7 @@ import heapq
 from collections.abc import Sequence
 
 from traffic import speedups
-from traffic.plans import Vehicle
+from traffic.plans import Vehicle, node_hold_end
 from traffic.reservations import Hold, ReservationTable
 from traffic.sipp import ClassGraph
 
@@ -67,10 +67,13 @@ def propagate_plain(
     table: ReservationTable,
     graphs: Sequence[ClassGraph],
     pushes: list[tuple[float, int, int]],
+    leave: float = -1.0,
 ) -> int:
     """Apply pushes (time, vehicle, index: no departure from that index before time).
 
-    Returns the number of steps moved. (`propagate` is this or its compiled twin.)
+    Returns the number of steps moved. (`propagate` is this or its compiled twin.) A node
+    hold ends on arrival at the next node, or with `leave` >= 0 (grid rules) `leave` s after
+    the departure (`plans.node_hold_end`).
 
     Steps are taken in the order of their planned departure before this call: every
     constraint points forward in that order (a vehicle's next step, the holds queued behind a
@@ -100,9 +103,9 @@ def propagate_plain(
                     hold.start = t
                     table.retimed(hold)
             v.arrive[i + 1] = arrive
-            for hold in (edge, v.node_holds[i]):
-                if hold.end < arrive:
-                    hold.end = arrive
+            for hold, end in ((edge, arrive), (v.node_holds[i], node_hold_end(t, arrive, leave))):
+                if hold.end < end:
+                    hold.end = end
                     table.ended(hold)
                     _push_followers(vehicles, table, hold, idx, heap)
             moved += 1

@@ -11,7 +11,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description="Traffic manager benchmark (issue 6)")
     parser.add_argument("--quick", action="store_true", help="a run of about a minute")
     parser.add_argument("--scenario", choices=["S1", "S2", "S3"], action="append")
-    parser.add_argument("--hours", type=float, help="simulated hours for S1/S3")
+    parser.add_argument(
+        "--hours", type=float, help="simulated hours (S2: instead of the instance's steps)"
+    )
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--instances", nargs="*", default=(), help="S2: LoRR instance names")
     parser.add_argument("--no-write", action="store_true", help="print only")
@@ -53,6 +55,12 @@ def main() -> None:
         "along a move's edge and into its end node (traffic.congestion), or 'off'; default: "
         f"{','.join(f'{x:g}' for x in scenarios.S2_CONGESTION)} for lifelong S2, off otherwise",
     )
+    parser.add_argument(
+        "--grid-rules",
+        choices=["on", "off"],
+        help="S2: LoRR's cells, a vehicle may follow into a cell being left (TrafficManager("
+        f"grid_rules=True)); default: {'on' if scenarios.S2_GRID_RULES else 'off'}",
+    )
     args = parser.parse_args()
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
@@ -67,6 +75,9 @@ def main() -> None:
                 lifelong=lifelong,
                 switch_push=switch_push,
                 congestion=_congestion(args.congestion, name, lifelong),
+                grid_rules=(args.grid_rules or ("on" if scenarios.S2_GRID_RULES else "off"))
+                == "on",
+                hours=args.hours,
             )
         else:
             runner = scenarios.s1 if name == "S1" else scenarios.s3

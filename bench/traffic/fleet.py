@@ -114,12 +114,14 @@ def fleet_manager(
     improve_slack: float = 2.0,
     switch_push: float | None = None,
     congestion: tuple[float, float] | None = None,
+    grid_rules: bool = False,
 ) -> TrafficManager:
     """A manager with vehicles `v0..` standing at `starts` (node id, heading).
 
     `lifelong` turns on the opt-in goal refuges and stepping aside (`traffic.aside`);
     `switch_push` (seconds, None: off) the opt-in switching (`traffic.switching`);
-    `congestion` (against, through; None: off) the opt-in flow cost (`traffic.congestion`).
+    `congestion` (against, through; None: off) the opt-in flow cost (`traffic.congestion`);
+    `grid_rules` LoRR's cells and following (`TrafficManager(grid_rules=True)`).
     """
     manager = TrafficManager(
         layout,
@@ -139,6 +141,7 @@ def fleet_manager(
         switching=switch_push is not None,
         switch_push=switch_push or 0.0,
         congestion=congestion,
+        grid_rules=grid_rules,
     )
     for i, (node, heading) in enumerate(starts):
         manager.add_vehicle(f"v{i}", node, 0.0, heading=heading)

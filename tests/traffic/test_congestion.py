@@ -105,7 +105,9 @@ def test_a_search_minimises_arrival_plus_cost(cost: float, detour: bool) -> None
         assert path == plain
 
 
-def dense_run(congestion: tuple[float, float] | None) -> tuple[object, ListTasks]:
+def dense_run(
+    congestion: tuple[float, float] | None, **options: object
+) -> tuple[object, ListTasks]:
     # (no dead ends: a vehicle idle for good in one, on another's goal, with the other
     # standing at its mouth, is a known gap of stepping aside, docs/TRAFFIC_RESULTS.md)
     grid = Layout.grid(cells(["......", ".@..@.", "......", ".@..@.", "......"]))
@@ -120,7 +122,7 @@ def dense_run(congestion: tuple[float, float] | None) -> tuple[object, ListTasks
     }
     m = manager(
         grid, starts, goal_refuge=True, step_aside=True, refuge_penalty=20.0,
-        switching=True, congestion=congestion,
+        switching=True, congestion=congestion, **options,
     )  # fmt: skip
     source = ListTasks(tasks)
     config = SimConfig(delay_probability=0.0, partial=True, finish_at_goal=True)

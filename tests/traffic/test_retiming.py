@@ -26,8 +26,11 @@ def time_ordered(
     table: ReservationTable,
     graphs: Sequence[ClassGraph],
     pushes: list[tuple[float, int, int]],
+    leave: float = -1.0,
 ) -> int:
-    """The re-timing of the seventh round: pushes in time order, each walked to its end."""
+    """The re-timing of the seventh round: pushes in time order, each walked to its end
+    (footprint rules only: `leave` < 0)."""
+    assert leave < 0
     heap = list(pushes)
     heapq.heapify(heap)
     moved = 0
