@@ -290,6 +290,7 @@ def s2(
                 f"{key}_collisions": figs["collisions"],
                 f"{key}_deadlocks_wait_cycles": figs["deadlocks_wait_cycles"],
                 f"{key}_deadlocks_stalls": figs["deadlocks_stalls"],
+                f"{key}_stall_chains": figs["stall_chains"],
                 f"{key}_plan_failures": figs["plan_failures"],
                 f"{key}_switches": figs["switches"],
                 f"{key}_plan_ms_p95": figs["plan_ms_p95"],
