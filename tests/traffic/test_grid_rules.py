@@ -4,7 +4,7 @@ Under grid rules a node is held until `GRID_LEAVE` s after its vehicle leaves it
 not until the vehicle reaches the next node. These tests check the planned times (following
 one cell behind, never two vehicles leaving each other's cells at once), the clearing on
 leaving, the re-timing, both search loops, and that random runs with delays (stays before a
-move) still never collide or deadlock.
+move), with and without switching, still never collide or deadlock.
 """
 
 from types import SimpleNamespace
@@ -158,14 +158,14 @@ def test_searches_under_grid_rules_search_the_same(monkeypatch: pytest.MonkeyPat
 
 
 @settings(
-    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True
 )
-@given(scenarios(), st.integers(0, 10_000), st.sampled_from([0.0, 0.3]))
+@given(scenarios(), st.integers(0, 10_000), st.sampled_from([0.0, 0.3]), st.booleans())
 def test_random_tasks_and_delays_under_grid_rules_never_deadlock(  # type: ignore[no-untyped-def]
-    scenario, seed, delay_probability
+    scenario, seed, delay_probability, switching
 ):
     layout, starts, tasks = scenario
     source = ListTasks(tasks)
-    m = manager(layout, starts, grid_rules=True)
+    m = manager(layout, starts, grid_rules=True, switching=switching)
     stats = CheckedSimulation(m, source, delayed(seed, delay_probability)).run(3000.0)
     assert_all_done_safely(stats, source, tasks)
