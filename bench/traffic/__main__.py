@@ -61,6 +61,12 @@ def main() -> None:
         help="S2: LoRR's cells, a vehicle may follow into a cell being left (TrafficManager("
         f"grid_rules=True)); default: {'on' if scenarios.S2_GRID_RULES else 'off'}",
     )
+    parser.add_argument(
+        "--delays",
+        choices=["on", "off"],
+        default="off",
+        help="S2: 5 %% of moves delayed 5-30 s as in S1/S3 (LoRR's rules have none)",
+    )
     args = parser.parse_args()
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
@@ -78,6 +84,7 @@ def main() -> None:
                 grid_rules=(args.grid_rules or ("on" if scenarios.S2_GRID_RULES else "off"))
                 == "on",
                 hours=args.hours,
+                delays=args.delays == "on",
             )
         else:
             runner = scenarios.s1 if name == "S1" else scenarios.s3

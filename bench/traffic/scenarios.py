@@ -225,23 +225,26 @@ def s2(
     congestion: tuple[float, float] | None = None,
     grid_rules: bool = False,
     hours: float | None = None,
+    delays: bool = False,
 ) -> dict[str, Any]:
     """S2: LoRR random-32-32-20, errands within the step limit vs best-known (target >= 60 %).
 
     `lifelong` (on by default here): goal refuges and stepping aside (`traffic.aside`); the
     next errand is planned at the goal (LoRR reveals it on arrival). With `hours` the run
     lasts that long instead of the instance's steps (a safety run: the errands are counted,
-    not compared with the best-known).
+    not compared with the best-known). With `delays` 5 % of moves are delayed 5-30 s as in
+    S1 and S3 (LoRR's rules have none).
     """
     names = list(instances) or (["MR23-I-04"] if quick else ["MR23-I-04", "MR23-I-03"])
     out: dict[str, Any] = {
         "scenario": "S2",
         "seed": seed,
-        "rules": "LoRR 2023, no delays",
+        "rules": "LoRR 2023" + (", grid rules" if grid_rules else ""),
         "lifelong": lifelong,
         "switch_push": switch_push,
         "congestion": congestion,
         "grid_rules": grid_rules,
+        "delays": "5% of moves +5-30 s" if delays else "none",
     }
     for name in names:
         instance = lorr(name)
@@ -265,7 +268,7 @@ def s2(
         )
         config = SimConfig(
             seed=seed,
-            delay_probability=0.0,
+            delay_probability=0.05 if delays else 0.0,
             # plain mode drives towards an unreachable goal; lifelong waits at its refuge (off
             # the busy nodes) and retries, which did better on I-03 (1,373 vs 1,336 errands)
             partial=not lifelong,
