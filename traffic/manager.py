@@ -8,7 +8,8 @@ Call pattern (all in the control process, under its lock):
   `plan.releases[...].base_end`, the rest horizon;
 - `on_progress(id, passed_index, now)` for every state message where lastNodeSequenceId moved:
   clears what the vehicle left and returns the base extensions (this vehicle's and any vehicle
-  that was waiting for it), each to be sent as an order update. Costs microseconds;
+  that was waiting for it), each to be sent as an order update. Costs microseconds; under
+  the opt-in grid rules (S2) also `on_leave(id, now)` when the vehicle drives off its node;
 - `replan(id, now)` re-plans the unreleased part (the base is irrevocable), e.g. after a delay;
 - `park(id, now)` sends a vehicle without a task to the nearest free parking node;
 - `block(id, now)` / `restore(...)` make a vehicle in error, manual mode or offline a static
