@@ -277,28 +277,24 @@ class Simulation:
             self.stats.delays += 1
         car.moving = True
         self.stats.moves += 1
-        if manager.leave >= 0:  # grid rules: u is left when the drive starts, after the turn
-            if before > 0:
-                self._push(self.now + before, LEAVE, car.idx)
-            else:
-                self._leave(car)
-            return
-        edge = v.edge_holds[p + 1]
-        assert edge is not None  # every step after the first has its segment hold
-        self._occupy(car, (u, edge.resource, n))
-        self._push(self.now + before + graph.travel[(u, n)], MOVE, car.idx)
+        if manager.leave < 0:  # footprint rules: u stays occupied until n is reached
+            edge = v.edge_holds[p + 1]
+            assert edge is not None  # every step after the first has its segment hold
+            self._occupy(car, (u, edge.resource, n))
+            self._push(self.now + before + graph.travel[(u, n)], MOVE, car.idx)
+        elif before > 0:  # grid rules: u is left when the drive starts, after the turn
+            self._push(self.now + before, LEAVE, car.idx)
+        else:
+            self._leave(car)
 
     def _leave(self, car: _Car) -> None:
         """Grid rules: the vehicle drives off its node (a delay, as any stay, came before)."""
-        manager = self.manager
-        v = manager.vehicle(car.name)
-        p = v.passed
-        u, n = v.route[p], v.route[p + 1]
-        edge = v.edge_holds[p + 1]
+        v = self.manager.vehicle(car.name)
+        u, n, edge = v.route[v.passed], v.route[v.passed + 1], v.edge_holds[v.passed + 1]
         assert edge is not None
         self._occupy(car, (edge.resource, n))
-        self._push(self.now + manager.graphs[v.cls].travel[(u, n)], MOVE, car.idx)
-        self._apply(manager.on_leave(car.name, self.now))
+        self._push(self.now + self.manager.graphs[v.cls].travel[(u, n)], MOVE, car.idx)
+        self._apply(self.manager.on_leave(car.name, self.now))
 
     def _arrive(self, car: _Car) -> None:
         manager = self.manager

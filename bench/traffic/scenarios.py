@@ -239,7 +239,7 @@ def s2(
     out: dict[str, Any] = {
         "scenario": "S2",
         "seed": seed,
-        "rules": "LoRR 2023" + (", grid rules" if grid_rules else ""),
+        "rules": "LoRR 2023",
         "lifelong": lifelong,
         "switch_push": switch_push,
         "congestion": congestion,
