@@ -14,7 +14,6 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import traffic.manager
 from tests.traffic.helpers import AMR, ListTasks, cells, manager
 from tests.traffic.test_congestion import dense_run
 from tests.traffic.test_deadlock_property import (
@@ -23,7 +22,7 @@ from tests.traffic.test_deadlock_property import (
     delayed,
     scenarios,
 )
-from tests.traffic.test_planning_speed import busy_grid
+from tests.traffic.test_retiming import _run
 from tests.traffic.test_speedups import BothLoops, needs_native
 from traffic import sipp, timing
 from traffic.des import SimConfig, Simulation
@@ -119,22 +118,16 @@ def test_re_timing_under_grid_rules_ends_a_node_hold_just_after_the_departure() 
     assert b.depart[2] == pytest.approx(3.0 + GRID_LEAVE)
 
 
-def busy_run(monkeypatch: pytest.MonkeyPatch, propagate: Any) -> list[object]:
-    """The delayed busy grid under grid rules, re-timed by `propagate`: what it did."""
-    monkeypatch.setattr(traffic.manager, "propagate", propagate)
-    m, sim, tasks = busy_grid(grid_rules=True)
-    stats = sim.run(400.0)
-    assert sum(tasks.done.values()) == 15
-    assert (stats.collisions, stats.wait_cycles, stats.stalls) == (0, 0, 0)
-    assert stats.delays > 0
-    plans = [(v.route, v.arrive, v.depart) for v in m._vehicles]
-    holds = sorted(repr(h) for queue in m.table.blocked for h in queue)
-    return [repr(stats.tasks), stats.moves, plans, holds]
-
-
 @needs_native
 def test_both_re_timings_agree_under_grid_rules(monkeypatch: pytest.MonkeyPatch) -> None:
-    assert busy_run(monkeypatch, timing.propagate_plain) == busy_run(monkeypatch, timing.propagate)
+    plain, _ = _run(monkeypatch, timing.propagate_plain, grid_rules=True)
+    compiled, moved = _run(monkeypatch, timing.propagate, grid_rules=True)
+    assert compiled == plain
+    (_, collisions, _, delays, _, wait_cycles, stalls), done = plain[0], plain[1]
+    assert sum(done.values()) == 15
+    assert (collisions, wait_cycles, stalls) == (0, 0, 0)
+    assert delays > 0
+    assert moved > 0
 
 
 # (with costs 0.5, 0.5 or 1, 0 this map meets the known gap of idle vehicles for good: the

@@ -75,7 +75,11 @@ def time_ordered(
     return moved
 
 
-def _run(monkeypatch: pytest.MonkeyPatch, propagate: Propagate) -> tuple[list[Any], int]:
+def _run(
+    monkeypatch: pytest.MonkeyPatch, propagate: Propagate, **options: object
+) -> tuple[list[Any], int]:
+    """The delayed busy grid re-timed by `propagate`: [outcome, tasks done, plans, holds]
+    and the steps moved."""
     moved = 0
 
     def counting(*args: Any) -> int:
@@ -85,11 +89,12 @@ def _run(monkeypatch: pytest.MonkeyPatch, propagate: Propagate) -> tuple[list[An
         return steps
 
     monkeypatch.setattr(traffic.manager, "propagate", counting)
-    m, sim, tasks = busy_grid()
+    m, sim, tasks = busy_grid(**options)
     stats = sim.run(400.0)
     plans = {v.name: (v.route, v.arrive, v.depart) for v in m._vehicles}
     holds = sorted(repr(h) for queue in m.table.blocked for h in queue)
     outcome = [repr(stats.tasks), stats.collisions, stats.moves, stats.delays, stats.waits]
+    outcome += [stats.wait_cycles, stats.stalls]
     return [outcome, tasks.done, plans, holds], moved
 
 
