@@ -102,10 +102,11 @@ class StopCauses(Simulation):
         v = m.vehicle(name)
         if v.blocked_by < 0:
             return "nobody (own stay)"
-        b = m._vehicles[v.blocked_by]
+        b = m.vehicle(m.vehicle_ids[v.blocked_by])
         if b.passed >= len(b.route) - 1:
             return "a vehicle at its route end"
-        if b.base > b.passed:  # driving: late when its move took over a second longer
+        if b.base > b.passed:  # driving: late when its move (turn included, at most 2 s)
+            # has taken over 3 s longer than the drive: an injected delay (5 to 30 s)
             travel = m.graphs[b.cls].travel[(b.route[b.passed], b.route[b.passed + 1])]
             late = self.now - b.last_progress > travel + 3.0
             return "a vehicle late on its move (delay)" if late else "a vehicle driving"
@@ -142,7 +143,7 @@ def run(args: argparse.Namespace) -> None:
         f" p95 {_pct(stats.plan_cpu_seconds, 95) * 1e3:.1f} ms; tick CPU p50 "
         f"{_pct(stats.replan_cpu_seconds, 50) * 1e3:.0f} ms; {wall:.0f} s wall"
     )
-    total = sum(sim.causes.values())
+    total = sum(sim.causes.values()) or 1.0
     for cause, seconds in sorted(sim.causes.items(), key=lambda item: -item[1]):
         print(f"  stopped behind {cause}: {seconds:.0f} s ({seconds / total:.0%})")
 
