@@ -22,7 +22,7 @@ from tests.traffic.test_deadlock_property import (
     delayed,
     scenarios,
 )
-from tests.traffic.test_retiming import _run
+from tests.traffic.test_retiming import retimed_run
 from tests.traffic.test_speedups import BothLoops, needs_native
 from traffic import sipp, timing
 from traffic.des import SimConfig, Simulation
@@ -120,8 +120,8 @@ def test_re_timing_under_grid_rules_ends_a_node_hold_just_after_the_departure() 
 
 @needs_native
 def test_both_re_timings_agree_under_grid_rules(monkeypatch: pytest.MonkeyPatch) -> None:
-    plain, _ = _run(monkeypatch, timing.propagate_plain, grid_rules=True)
-    compiled, moved = _run(monkeypatch, timing.propagate, grid_rules=True)
+    plain, _ = retimed_run(monkeypatch, timing.propagate_plain, grid_rules=True)
+    compiled, moved = retimed_run(monkeypatch, timing.propagate, grid_rules=True)
     assert compiled == plain
     (_, collisions, _, delays, _, wait_cycles, stalls), done = plain[0], plain[1]
     assert sum(done.values()) == 15

@@ -75,7 +75,7 @@ def time_ordered(
     return moved
 
 
-def _run(
+def retimed_run(
     monkeypatch: pytest.MonkeyPatch, propagate: Propagate, **options: object
 ) -> tuple[list[Any], int]:
     """The delayed busy grid re-timed by `propagate`: [outcome, tasks done, plans, holds]
@@ -102,8 +102,8 @@ def _run(
 def test_departure_order_gives_the_times_of_a_walk_in_push_order(
     monkeypatch: pytest.MonkeyPatch, propagate: Propagate
 ) -> None:
-    reference, walked = _run(monkeypatch, time_ordered)
-    result, moved = _run(monkeypatch, propagate)
+    reference, walked = retimed_run(monkeypatch, time_ordered)
+    result, moved = retimed_run(monkeypatch, propagate)
     assert result == reference
     assert reference[0][1] == 0  # no collisions
     assert 0 < moved < walked  # here 205 steps moved instead of 271
