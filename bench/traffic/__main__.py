@@ -1,6 +1,9 @@
 """`python -m bench.traffic [--quick] [--scenario S1|S2|S3] [--hours H] [--instances ...]`."""
 
 import argparse
+from collections.abc import Callable
+from functools import partial
+from pathlib import Path
 from typing import Any
 
 from bench.results import write
@@ -67,6 +70,12 @@ def main() -> None:
         default="off",
         help="S2: 5 %% of moves delayed 5-30 s as in S1/S3 (LoRR's rules have none)",
     )
+    parser.add_argument(
+        "--checkpoint-hours",
+        type=float,
+        help="S1/S3: write the figures so far every H simulated hours (a long run that is cut "
+        "short leaves them; the file says partial)",
+    )
     args = parser.parse_args()
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
@@ -106,15 +115,21 @@ def main() -> None:
                 retime_growth=args.retime_growth,
                 switch_push=switch_push,
                 congestion=_congestion(args.congestion, name, lifelong),
+                checkpoint_hours=args.checkpoint_hours,
+                on_checkpoint=None if args.no_write else _writer(name, args.tag),
             )
         figures["quick"] = args.quick
         print(f"== {name}")
         for key, value in figures.items():
             print(f"  {key:32} {value}")
         if not args.no_write:
-            suffix = f"_{args.tag}" if args.tag else ""
-            path = write(f"traffic_{name.lower()}{suffix}", figures)
-            print(f"  -> {path}")
+            print(f"  -> {_writer(name, args.tag)(figures)}")
+
+
+def _writer(scenario: str, tag: str) -> Callable[[dict[str, Any]], Path]:
+    """Writes a scenario's figures to bench/results/traffic_<scenario>[_<tag>].json."""
+    suffix = f"_{tag}" if tag else ""
+    return partial(write, f"traffic_{scenario.lower()}{suffix}")
 
 
 def _congestion(given: str, scenario: str, lifelong: bool) -> tuple[float, float] | None:

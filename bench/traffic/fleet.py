@@ -6,7 +6,7 @@ import math
 import random
 import statistics
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -148,10 +148,24 @@ def fleet_manager(
     return manager
 
 
-def run(manager: TrafficManager, tasks: Tasks, seconds: float, config: SimConfig) -> Run:
-    """Execute `seconds` of simulated time."""
+def run(
+    manager: TrafficManager,
+    tasks: Tasks,
+    seconds: float,
+    config: SimConfig,
+    *,
+    cuts: Sequence[float] = (),
+    on_cut: Callable[[Run], None] | None = None,
+) -> Run:
+    """Execute `seconds` of simulated time; at each of `cuts` (s, before `seconds`) hand
+    `on_cut` the run so far (a long run leaves its figures on the way)."""
     began = time.perf_counter()
     simulation = Simulation(manager, tasks, config)
+    for cut in sorted(c for c in cuts if 0 < c < seconds):
+        stats = simulation.run(cut)
+        if on_cut is not None:
+            so_far = len(stats.tasks) + open_work(manager, simulation)
+            on_cut(Run(manager, stats, cut, time.perf_counter() - began, so_far))
     stats = simulation.run(seconds)
     wall = time.perf_counter() - began
     work = len(stats.tasks) + open_work(manager, simulation)
@@ -184,6 +198,9 @@ def open_work(manager: TrafficManager, simulation: Simulation) -> float:
     return done
 
 
+Tour = tuple[float, float]  # when a ghost vehicle began a task and when it finished it
+
+
 def ghost(
     manager: TrafficManager,
     starts: Sequence[tuple[str, float]],
@@ -191,22 +208,33 @@ def ghost(
     seconds: float,
     config: SimConfig,
 ) -> tuple[int, float]:
-    """Tasks finished in `seconds` when vehicles ignore each other (same tasks and delays).
+    """Tasks finished in `seconds` when vehicles ignore each other (same tasks and delays),
+    and the work done (see `ghost_tours` and `ghost_at`)."""
+    return ghost_at(ghost_tours(manager, starts, tasks, seconds, config), seconds)
+
+
+def ghost_tours(
+    manager: TrafficManager,
+    starts: Sequence[tuple[str, float]],
+    tasks: Tasks,
+    seconds: float,
+    config: SimConfig,
+) -> list[list[Tour]]:
+    """Per vehicle, the tasks it drives in `seconds` as if alone (the last one may end later).
 
     Every vehicle drives its own tasks from its start as if alone: free-flow routes (turns and
-    handling included), the same delay probability and range per move. Also returns the work
-    done: tasks finished plus, for the task each vehicle is on at the end, the share of its
-    duration already spent (as `Run.work`).
+    handling included), the same delay probability and range per move.
     """
     layout = manager.layout
     graph = manager.graphs[0]
     empty = ReservationTable(layout.resource_count)
-    finished = 0
-    work = 0.0
+    tours: list[list[Tour]] = []
     for i, (start, angle) in enumerate(starts):
         name = f"v{i}"
         rng = random.Random(config.seed * 100_003 + i)
         node, heading, now = layout.node(start), heading_key(angle), 0.0
+        mine: list[Tour] = []
+        tours.append(mine)
         while now < seconds:
             goals = tasks.next_goals(name, layout.node_ids[node], now)
             if goals is None:
@@ -220,13 +248,24 @@ def ghost(
             for _ in range(len(path.nodes) - 1):
                 if rng.random() < config.delay_probability:
                     now += rng.uniform(*config.delay_range)
-            if now <= seconds:
-                finished += 1
-                work += 1.0
-            elif now > began:
-                work += (seconds - began) / (now - began)
+            mine.append((began, now))
             tasks.finished(name, goals, now)
             node, heading = path.nodes[-1], path.headings[-1]
+    return tours
+
+
+def ghost_at(tours: Sequence[Sequence[Tour]], cut: float) -> tuple[int, float]:
+    """The ghost's tasks finished by `cut` s and its work done: those tasks plus, for the task
+    each vehicle is on at the cut, the share of its duration already spent (as `Run.work`)."""
+    finished = 0
+    work = 0.0
+    for mine in tours:
+        for began, end in mine:
+            if end <= cut:
+                finished += 1
+                work += 1.0
+            elif began < cut:
+                work += (cut - began) / (end - began)
     return finished, work
 
 

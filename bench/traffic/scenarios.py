@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+import math
 import random
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from bench.traffic.fleet import (
+    Run,
+    Tour,
     WarehouseTasks,
     figures,
     fleet_manager,
-    ghost,
+    ghost_at,
+    ghost_tours,
     node_id,
     run,
 )
@@ -71,11 +75,14 @@ def warehouse_scenario(
     retime_growth: float = 0.0,
     switch_push: float | None = None,
     congestion: tuple[float, float] | None = None,
+    checkpoint_hours: float | None = None,
+    on_checkpoint: Callable[[dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
     """Vehicles start at distinct workstations and run pick -> drop orders for `hours`.
 
     `lifelong` (off for the published figures): goal refuges and stepping aside, an order done
-    at its drop and the next planned from there (`traffic.aside`).
+    at its drop and the next planned from there (`traffic.aside`). Every `checkpoint_hours`
+    the figures so far go to `on_checkpoint` (the ghost's at the same cut).
     """
     began = time.perf_counter()
     layout = Layout.grid(grid.free, parking=grid.stations)
@@ -102,21 +109,7 @@ def warehouse_scenario(
     config = SimConfig(
         seed=seed, finish_at_goal=lifelong, retry_backoff=2.0, reassign_after=REASSIGN_AFTER
     )
-    seconds = hours * 3600
-    tasks = WarehouseTasks(grid, seed, manager.vehicle_ids)
-    tasks.standing({f"v{i}": node for i, (node, _) in enumerate(starts)})
-    result = run(manager, tasks, seconds, config)
-    out = figures(result, seed=seed)
-    ghost_tasks = WarehouseTasks(grid, seed, manager.vehicle_ids, ghost=True)
-    ghosted, ghost_work = ghost(manager, starts, ghost_tasks, seconds, config)
-    out["ghost_throughput_per_hour"] = round(ghosted / hours, 1)
-    out["rho"] = round(len(result.stats.tasks) / ghosted, 3) if ghosted else 0.0
-    # the same ratio with the open tasks' progress counted: S3's tours take 15 to 30 minutes,
-    # so over half an hour the count depends on where the cut falls in each tour
-    out["work_tasks"] = round(result.work, 1)
-    out["ghost_work_tasks"] = round(ghost_work, 1)
-    out["rho_work"] = round(result.work / ghost_work, 3) if ghost_work else 0.0
-    out.update(
+    settings = dict(
         scenario=name,
         map=f"{grid.width}x{grid.height}",
         free_cells=len(grid.free),
@@ -129,8 +122,59 @@ def warehouse_scenario(
         switch_push=switch_push,
         congestion=congestion,
         delay="5% of moves +5-30 s",
-        setup_s=round(setup, 2),
     )
+    seconds = hours * 3600
+    ghost_tasks = WarehouseTasks(grid, seed, manager.vehicle_ids, ghost=True)
+    tours = ghost_tours(manager, starts, ghost_tasks, seconds, config)
+    tasks = WarehouseTasks(grid, seed, manager.vehicle_ids)
+    tasks.standing({f"v{i}": node for i, (node, _) in enumerate(starts)})
+    cuts: list[float] = []
+    checkpoints: list[dict[str, Any]] = []
+
+    def cut(so_far: Run) -> None:
+        checkpoints.append(_with_ghost(figures(so_far, seed=seed), so_far, tours))
+        if on_checkpoint is not None:
+            trail = [{k: c[k] for k in CHECKPOINT_KEYS} for c in checkpoints]
+            on_checkpoint({**checkpoints[-1], **settings, "partial": True, "checkpoints": trail})
+
+    if checkpoint_hours:
+        cuts = [k * checkpoint_hours * 3600 for k in range(1, math.ceil(hours / checkpoint_hours))]
+    result = run(manager, tasks, seconds, config, cuts=cuts, on_cut=cut)
+    out = _with_ghost(figures(result, seed=seed), result, tours)
+    if checkpoints:
+        out["checkpoints"] = [{k: c[k] for k in CHECKPOINT_KEYS} for c in checkpoints]
+    out.update(settings, setup_s=round(setup, 2))
+    return out
+
+
+# what the results keep of each checkpoint of a long run (the whole figures go to
+# `on_checkpoint`)
+CHECKPOINT_KEYS = (
+    "simulated_hours",
+    "tasks_finished",
+    "ghost_tasks_finished",
+    "rho",
+    "rho_work",
+    "collisions",
+    "deadlocks_wait_cycles",
+    "deadlocks_stalls",
+    "moves",
+    "wall_s",
+)
+
+
+def _with_ghost(out: dict[str, Any], result: Run, tours: list[list[Tour]]) -> dict[str, Any]:
+    """`out` plus the ghost's figures at the run's end and the ratios to them."""
+    ghosted, ghost_work = ghost_at(tours, result.seconds)
+    hours = result.seconds / 3600
+    out["ghost_tasks_finished"] = ghosted
+    out["ghost_throughput_per_hour"] = round(ghosted / hours, 1)
+    out["rho"] = round(len(result.stats.tasks) / ghosted, 3) if ghosted else 0.0
+    # the same ratio with the open tasks' progress counted: S3's tours take 15 to 30 minutes,
+    # so over half an hour the count depends on where the cut falls in each tour
+    out["work_tasks"] = round(result.work, 1)
+    out["ghost_work_tasks"] = round(ghost_work, 1)
+    out["rho_work"] = round(result.work / ghost_work, 3) if ghost_work else 0.0
     return out
 
 
@@ -145,6 +189,8 @@ def s1(
     retime_growth: float = 0.0,
     switch_push: float | None = None,
     congestion: tuple[float, float] | None = None,
+    checkpoint_hours: float | None = None,
+    on_checkpoint: Callable[[dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
     """S1: warehouse-10-20-10-2-1 pattern, 100 vehicles (rho >= 0.85, plan p95 <= 25 ms)."""
     grid = warehouse()
@@ -162,6 +208,8 @@ def s1(
         retime_growth=retime_growth,
         switch_push=switch_push,
         congestion=congestion,
+        checkpoint_hours=checkpoint_hours,
+        on_checkpoint=on_checkpoint,
     )
 
 
@@ -176,6 +224,8 @@ def s3(
     retime_growth: float = 0.0,
     switch_push: float | None = None,
     congestion: tuple[float, float] | None = None,
+    checkpoint_hours: float | None = None,
+    on_checkpoint: Callable[[dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
     """S3: 1,000 vehicles on a 500×140 warehouse (targets: rho >= 0.7, plan p95 <= 150 ms)."""
     grid = warehouse(block_cols=36, block_rows=45, margin=51, station_cols=8)
@@ -194,6 +244,8 @@ def s3(
         retime_growth=retime_growth,
         switch_push=switch_push,
         congestion=congestion,
+        checkpoint_hours=checkpoint_hours,
+        on_checkpoint=on_checkpoint,
     )
 
 

@@ -1,0 +1,62 @@
+"""A long warehouse run leaves its figures on the way (`--checkpoint-hours`): cutting the run
+changes nothing in it, and each cut is measured against the ghost at the same time."""
+
+from typing import Any
+
+from bench.traffic import scenarios
+from bench.traffic.fleet import Run, ghost, ghost_at, ghost_tours, run
+from bench.traffic.maps import warehouse
+from tests.traffic.helpers import ListTasks, cells, manager
+from traffic.des import SimConfig
+from traffic.layout import Layout
+from traffic.plans import Goal
+
+LANE = Layout.grid(cells(["..........."]))  # 0,0 .. 0,10: ten 1 m moves east
+SMALL = warehouse(block_cols=2, block_rows=2, margin=3, station_cols=1)
+
+
+def _shuttle(trips: int, vehicle: str = "a") -> ListTasks:
+    return ListTasks({vehicle: [[Goal("0,10")], [Goal("0,0")]] * trips})
+
+
+def test_a_run_cut_into_pieces_is_the_same_run() -> None:
+    config = SimConfig(seed=3, delay_probability=0.3)
+    whole = run(manager(LANE, {"a": "0,0"}), _shuttle(5), 90.0, config)
+    seen: list[Run] = []
+    m = manager(LANE, {"a": "0,0"})
+    pieces = run(m, _shuttle(5), 90.0, config, cuts=[60.0, 30.0], on_cut=seen.append)
+    assert [r.seconds for r in seen] == [30.0, 60.0]
+    assert [t.done for t in pieces.stats.tasks] == [t.done for t in whole.stats.tasks]
+    assert pieces.stats.moves == whole.stats.moves > 0
+    assert pieces.work == whole.work
+    # the figures at a cut are those of a run that stops there
+    at_30 = run(manager(LANE, {"a": "0,0"}), _shuttle(5), 30.0, config)
+    assert seen[0].work == at_30.work
+
+
+def test_the_ghost_at_a_cut_counts_as_a_ghost_run_to_that_cut() -> None:
+    m = manager(LANE, {"a": "0,0"})
+    config = SimConfig(seed=3, delay_probability=0.3)
+    start = [("0,0", 0.0)]
+    tours = ghost_tours(m, start, _shuttle(20, "v0"), 200.0, config)
+    for cut in (25.0, 80.0, 200.0):
+        assert ghost_at(tours, cut) == ghost(m, start, _shuttle(20, "v0"), cut, config)
+    assert 0 < ghost_at(tours, 25.0)[1] < ghost_at(tours, 80.0)[1]
+
+
+def test_a_warehouse_run_reports_every_checkpoint() -> None:
+    written: list[dict[str, Any]] = []
+    out = scenarios.warehouse_scenario(
+        "S1", SMALL, 4, 0.06, seed=1, max_expansions=5_000, checkpoint_hours=0.02,
+        on_checkpoint=written.append,
+    )  # fmt: skip
+    assert [w["simulated_hours"] for w in written] == [0.02, 0.04]
+    assert all(w["partial"] and w["vehicles"] == 4 and w["map"] == out["map"] for w in written)
+    assert [len(w["checkpoints"]) for w in written] == [1, 2]
+    trail = out["checkpoints"]
+    assert [c["simulated_hours"] for c in trail] == [0.02, 0.04]
+    finished = [c["tasks_finished"] for c in trail] + [out["tasks_finished"]]
+    assert finished == sorted(finished)
+    assert finished[-1] > 0
+    assert "partial" not in out
+    assert out["ghost_tasks_finished"] >= trail[-1]["ghost_tasks_finished"] > 0
