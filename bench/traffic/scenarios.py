@@ -76,7 +76,7 @@ def warehouse_scenario(
     switch_push: float | None = None,
     congestion: tuple[float, float] | None = None,
     checkpoint_hours: float | None = None,
-    on_checkpoint: Callable[[dict[str, Any]], None] | None = None,
+    on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
 ) -> dict[str, Any]:
     """Vehicles start at distinct workstations and run pick -> drop orders for `hours`.
 
@@ -190,7 +190,7 @@ def s1(
     switch_push: float | None = None,
     congestion: tuple[float, float] | None = None,
     checkpoint_hours: float | None = None,
-    on_checkpoint: Callable[[dict[str, Any]], None] | None = None,
+    on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
 ) -> dict[str, Any]:
     """S1: warehouse-10-20-10-2-1 pattern, 100 vehicles (rho >= 0.85, plan p95 <= 25 ms)."""
     grid = warehouse()
@@ -225,7 +225,7 @@ def s3(
     switch_push: float | None = None,
     congestion: tuple[float, float] | None = None,
     checkpoint_hours: float | None = None,
-    on_checkpoint: Callable[[dict[str, Any]], None] | None = None,
+    on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
 ) -> dict[str, Any]:
     """S3: 1,000 vehicles on a 500×140 warehouse (targets: rho >= 0.7, plan p95 <= 150 ms)."""
     grid = warehouse(block_cols=36, block_rows=45, margin=51, station_cols=8)
