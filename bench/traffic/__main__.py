@@ -45,6 +45,13 @@ def main() -> None:
         "earliest departure (fewer pushes of long waits; 0: off)",
     )
     parser.add_argument(
+        "--tick-every",
+        type=float,
+        default=1.0,
+        help="S1/S3: simulated seconds between the manager's ticks (re-timing, re-plans of "
+        "waiting vehicles; releases do not wait for them)",
+    )
+    parser.add_argument(
         "--switch-push",
         default="",
         help="SECONDS: a vehicle waiting behind a late one may go ahead of it, pushing the late "
@@ -113,6 +120,7 @@ def main() -> None:
                 lifelong=lifelong,
                 retime_slack=args.retime_slack,
                 retime_growth=args.retime_growth,
+                tick_every=args.tick_every,
                 switch_push=switch_push,
                 congestion=_congestion(args.congestion, name, lifelong),
                 checkpoint_hours=args.checkpoint_hours,

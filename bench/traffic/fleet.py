@@ -317,6 +317,9 @@ def figures(result: Run, *, sample: int = 1500, seed: int = 0) -> dict[str, Any]
         "release_cpu_us_p99": _round(_pct(release_cpu_us, 99)),
         "tick_cpu_ms_p50": _round(_pct(tick_cpu_ms, 50)),
         "tick_cpu_ms_p95": _round(_pct(tick_cpu_ms, 95)),
+        "ticks": len(tick_cpu_ms),
+        # per simulated second, whatever the tick interval (SimConfig.tick_every)
+        "tick_cpu_s_per_simulated_s": _round(sum(tick_cpu_ms) / 1e3 / max(result.seconds, 1e-9)),
         "switches": manager.switches,
         "switches_pushing_the_late_vehicle": manager.switch_pushes,
         "switch_pushes_dropped": manager.switches_dropped,

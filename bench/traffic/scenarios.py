@@ -73,6 +73,7 @@ def warehouse_scenario(
     lifelong: bool = False,
     retime_slack: float = 2.0,
     retime_growth: float = 0.0,
+    tick_every: float = 1.0,
     switch_push: float | None = None,
     congestion: tuple[float, float] | None = None,
     checkpoint_hours: float | None = None,
@@ -107,7 +108,11 @@ def warehouse_scenario(
     # An order whose plan failed REASSIGN_AFTER times in a row before it started goes to another
     # workstation (S3: first tours whose drop stayed held for minutes were stalls).
     config = SimConfig(
-        seed=seed, finish_at_goal=lifelong, retry_backoff=2.0, reassign_after=REASSIGN_AFTER
+        seed=seed,
+        finish_at_goal=lifelong,
+        retry_backoff=2.0,
+        reassign_after=REASSIGN_AFTER,
+        tick_every=tick_every,
     )
     settings = dict(
         scenario=name,
@@ -119,6 +124,7 @@ def warehouse_scenario(
         lifelong=lifelong,
         retime_slack=retime_slack,
         retime_growth=retime_growth,
+        tick_every=tick_every,
         switch_push=switch_push,
         congestion=congestion,
         delay="5% of moves +5-30 s",
@@ -187,6 +193,7 @@ def s1(
     lifelong: bool = False,
     retime_slack: float = 2.0,
     retime_growth: float = 0.0,
+    tick_every: float = 1.0,
     switch_push: float | None = None,
     congestion: tuple[float, float] | None = None,
     checkpoint_hours: float | None = None,
@@ -206,6 +213,7 @@ def s1(
         lifelong=lifelong,
         retime_slack=retime_slack,
         retime_growth=retime_growth,
+        tick_every=tick_every,
         switch_push=switch_push,
         congestion=congestion,
         checkpoint_hours=checkpoint_hours,
@@ -222,6 +230,7 @@ def s3(
     lifelong: bool = False,
     retime_slack: float = 2.0,
     retime_growth: float = 0.0,
+    tick_every: float = 1.0,
     switch_push: float | None = None,
     congestion: tuple[float, float] | None = None,
     checkpoint_hours: float | None = None,
@@ -242,6 +251,7 @@ def s3(
         lifelong=lifelong,
         retime_slack=retime_slack,
         retime_growth=retime_growth,
+        tick_every=tick_every,
         switch_push=switch_push,
         congestion=congestion,
         checkpoint_hours=checkpoint_hours,

@@ -1,5 +1,6 @@
 """A long warehouse run leaves its figures on the way (`--checkpoint-hours`): cutting the run
-changes nothing in it, and each cut is measured against the ghost at the same time."""
+changes nothing in it, and each cut is measured against the ghost at the same time. The tick
+interval (`--tick-every`) reaches the simulation."""
 
 from typing import Any
 
@@ -60,3 +61,13 @@ def test_a_warehouse_run_reports_every_checkpoint() -> None:
     assert finished[-1] > 0
     assert "partial" not in out
     assert out["ghost_tasks_finished"] >= trail[-1]["ghost_tasks_finished"] > 0
+
+
+def test_the_tick_interval_reaches_the_simulation() -> None:
+    every_second = scenarios.warehouse_scenario("S1", SMALL, 4, 0.02, seed=1, max_expansions=5_000)
+    every_two = scenarios.warehouse_scenario(
+        "S1", SMALL, 4, 0.02, seed=1, max_expansions=5_000, tick_every=2.0
+    )
+    assert every_second["ticks"] == 72  # 0.02 h
+    assert every_two["ticks"] == 36
+    assert every_two["tick_every"] == 2.0
