@@ -140,7 +140,7 @@ def warehouse_scenario(
     def cut(so_far: Run) -> None:
         checkpoints.append(_with_ghost(figures(so_far, seed=seed), so_far, tours))
         if on_checkpoint is not None:
-            trail = [{k: c[k] for k in CHECKPOINT_KEYS} for c in checkpoints]
+            trail = _trail(checkpoints)
             on_checkpoint({**checkpoints[-1], **settings, "partial": True, "checkpoints": trail})
 
     if checkpoint_hours:
@@ -148,7 +148,7 @@ def warehouse_scenario(
     result = run(manager, tasks, seconds, config, cuts=cuts, on_cut=cut)
     out = _with_ghost(figures(result, seed=seed), result, tours)
     if checkpoints:
-        out["checkpoints"] = [{k: c[k] for k in CHECKPOINT_KEYS} for c in checkpoints]
+        out["checkpoints"] = _trail(checkpoints)
     out.update(settings, setup_s=round(setup, 2))
     return out
 
@@ -167,6 +167,11 @@ CHECKPOINT_KEYS = (
     "moves",
     "wall_s",
 )
+
+
+def _trail(checkpoints: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """What the results keep of each checkpoint so far."""
+    return [{k: c[k] for k in CHECKPOINT_KEYS} for c in checkpoints]
 
 
 def _with_ghost(out: dict[str, Any], result: Run, tours: list[list[Tour]]) -> dict[str, Any]:
