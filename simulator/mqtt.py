@@ -72,6 +72,12 @@ def _guarded(name: str, func: Callable[..., None]) -> Callable[..., None]:
     return wrapper
 
 
+def _on_grid(last: float, period: float, now: float) -> float:
+    """The send time to count the next `period` from: one period after `last`, or `now` after
+    a stall (two periods or more), so a late tick never bursts to catch up."""
+    return now if now - last >= 2 * period else last + period
+
+
 class VehicleLink:
     """Runs one :class:`VirtualVehicle` on MQTT: subscribes to its order/instantActions
     topics and publishes connection, factsheet, state and visualization.
@@ -289,13 +295,20 @@ class VehicleLink:
         cfg = self.vehicle.config
         with self.lock:
             self.vehicle.tick(min(dt, _MAX_TICK_SECONDS))
-            if now - self._last_state >= cfg.state_interval:
+            previous = self._last_state
+            periodic = now - previous >= cfg.state_interval
+            if periodic:
                 self.vehicle.mark_state_due()
             outage = self.vehicle.saboteur.take_disconnect() if self.connected.is_set() else None
             silent = self.silent or self.vehicle.silent
         if outage is not None:
             self.break_connection(outage)
         self.flush()
+        if periodic:
+            # The periodic state keeps its nominal grid too: restarting the interval at each
+            # send added a tick's lateness to every period (0.5 s became 0.55 s at 10 Hz, more
+            # on a loaded machine). A state sent on an event still restarts it (`_publish_state`).
+            self._last_state = _on_grid(previous, cfg.state_interval, now)
         hz = cfg.visualization_hz
         period = 1.0 / hz if hz > 0 else 0.0
         if hz > 0 and now - self._last_visualization >= period and not silent:
@@ -303,8 +316,7 @@ class VehicleLink:
                 return
             # Keep the cadence on the nominal grid (ticks rarely land exactly on it), but
             # never try to catch up on messages missed during a stall.
-            behind = now - self._last_visualization >= 2 * period
-            self._last_visualization = now if behind else self._last_visualization + period
+            self._last_visualization = _on_grid(self._last_visualization, period, now)
             with self.lock:
                 payload = encode(wire.visualization(self.vehicle))
             self.client.publish(self.topic(TopicKind.VISUALIZATION), payload, qos=0)
