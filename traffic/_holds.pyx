@@ -8,7 +8,9 @@
 """
 
 cimport cython
+from cpython.object cimport PyObject
 from libcpp.algorithm cimport pop_heap, push_heap
+from libcpp.unordered_set cimport unordered_set
 from libcpp.vector cimport vector
 
 
@@ -69,9 +71,38 @@ cdef inline Step _heap_pop(vector[Step]& heap) noexcept:
     return top
 
 
-cdef inline void _mark(set marks, tuple conflicts) except *:
+ctypedef unordered_set[PyObject*] Marked
+
+
+cdef inline void _mark(set marks, Marked& done, tuple conflicts) except *:
+    """Add the resources of `conflicts` to `marks`, once per call of `propagate`: the sets
+    only grow during a call, and a conflict tuple is shared by every hold of one vehicle class
+    on one resource (`traffic.footprint.ConflictSets`), so its address says it is done."""
+    if not done.insert(<PyObject*>conflicts).second:
+        return
     for r in conflicts:
         marks.add(r)
+
+
+cdef inline void _start(Hold hold, double t, set unsorted, Marked& marked) except *:
+    """Move a hold's start to `t` if later (`ReservationTable.retimed`)."""
+    if hold.start < t:
+        hold.start = t
+        if not hold.released:
+            hold.key = hold.start
+            _mark(unsorted, marked, hold.conflicts)
+
+
+cdef inline void _end(
+    Hold hold, double end, set stale, Marked& marked, list fleet, list blocked, set unsorted,
+    long long idx, vector[Step]& heap
+) except *:
+    """Move a hold's end to `end` if later (`ReservationTable.ended`) and push the holds
+    queued behind it."""
+    if hold.end < end:
+        hold.end = end
+        _mark(stale, marked, hold.conflicts)
+        _push_followers(fleet, blocked, unsorted, hold, idx, heap)
 
 
 def propagate(vehicles, table, graphs, pushes, double leave=-1.0):
@@ -81,16 +112,17 @@ def propagate(vehicles, table, graphs, pushes, double leave=-1.0):
     instead of tuples)."""
     cdef vector[Step] heap
     cdef Step item, entry
+    cdef Marked marked_unsorted, marked_stale
     cdef list fleet = vehicles
     cdef set unsorted = table.unsorted, stale = table._stale
     cdef list blocked = table.blocked
     cdef long long moved = 0, idx, i, last
-    cdef double t, arrive, ready, seconds, left, end
+    cdef double t, arrive, ready, seconds, left
     for t, idx, i in pushes:
         item.key, item.minus = fleet[idx].depart[i], -t
         item.vehicle, item.index = idx, i
         _heap_push(heap, item)
-    cdef Hold edge, node, hold
+    cdef Hold edge, node, here
     cdef list depart, arrivals, edge_holds, node_holds, route, headings, goals, stops
     cdef dict travel
     cdef long long passed, k, h0, h1
@@ -109,22 +141,16 @@ def propagate(vehicles, table, graphs, pushes, double leave=-1.0):
         while True:
             depart[i] = t
             arrive = t + <double>travel[(route[i], route[i + 1])]
-            edge, node = <Hold?>edge_holds[i + 1], <Hold?>node_holds[i + 1]
-            for hold in (edge, node):
-                if hold.start < t:
-                    hold.start = t
-                    if not hold.released:  # ReservationTable.retimed
-                        hold.key = hold.start
-                        _mark(unsorted, hold.conflicts)
+            edge, node = <Hold>edge_holds[i + 1], <Hold>node_holds[i + 1]  # never None here
+            _start(edge, t, unsorted, marked_unsorted)
+            _start(node, t, unsorted, marked_unsorted)
             arrivals[i + 1] = arrive
             # a node hold ends on arrival at the next node, or (grid rules) `leave` s after
             # the departure (`traffic.plans.node_hold_end`)
             left = arrive if leave < 0 else t + leave
-            for hold, end in ((edge, arrive), (<Hold?>node_holds[i], left)):
-                if hold.end < end:
-                    hold.end = end
-                    _mark(stale, hold.conflicts)  # ReservationTable.ended
-                    _push_followers(fleet, blocked, unsorted, hold, idx, heap)
+            _end(edge, arrive, stale, marked_stale, fleet, blocked, unsorted, idx, heap)
+            here = <Hold>node_holds[i]  # the node it leaves
+            _end(here, left, stale, marked_stale, fleet, blocked, unsorted, idx, heap)
             moved += 1
             i += 1
             if i >= last:
@@ -161,13 +187,16 @@ cdef void _push_followers(
     if position < 0:
         return  # already cleared
     cdef double end = hold.end
-    cdef bint ordered = hold.resource not in unsorted  # keys ascend: stop at the first >= end
+    cdef int ordered = -1  # keys ascend (not marked unsorted): stop at the first >= end
     cdef Hold follower
     cdef Step item
     for k in range(position + 1, n):
-        follower = <Hold?>queue[k]
-        if follower.key >= end and ordered:
-            break
+        follower = <Hold>queue[k]  # the lists hold only holds
+        if follower.key >= end:
+            if ordered < 0:  # asked once, and only here: a set lookup per call was 7 %
+                ordered = hold.resource not in unsorted
+            if ordered:
+                break
         if follower.vehicle != idx and not follower.released and follower.start < end:
             item.index = follower.index - 1
             item.vehicle = follower.vehicle
