@@ -124,6 +124,15 @@ class ClassGraph:
             for w, seg, tau, w_key in self.succ[node]
         ]
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without its caches, which are rebuilt as searches need them (the compiled
+        search's move arrays, the heuristic tables): a long benchmark run is saved and resumed
+        whole (`bench.traffic --resume`), the same run either way."""
+        state = self.__dict__.copy()
+        state.pop("_native_moves", None)
+        state["_tables"] = OrderedDict()
+        return state
+
     def state(self, node: int, key: int) -> int:
         """The state of `node` entered with heading `key`, or -1 if no edge enters it so."""
         return self.states[node].get(key, -1)

@@ -83,7 +83,22 @@ def main() -> None:
         help="S1/S3: write the figures so far every H simulated hours (a long run that is cut "
         "short leaves them; the file says partial)",
     )
+    parser.add_argument(
+        "--state",
+        type=Path,
+        help="S1/S3 with --checkpoint-hours: save the whole run to FILE at every checkpoint "
+        "(gzip'd pickle), to be resumed with --resume",
+    )
+    parser.add_argument(
+        "--resume",
+        type=Path,
+        help="go on with a run saved by --state (its scenario and settings; --tag, "
+        "--no-write and --state as given now)",
+    )
     args = parser.parse_args()
+    if args.resume:
+        _resume(args.resume, args.tag, args.no_write, args.state)
+        return
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
         figures: dict[str, Any]
@@ -125,13 +140,31 @@ def main() -> None:
                 congestion=_congestion(args.congestion, name, lifelong),
                 checkpoint_hours=args.checkpoint_hours,
                 on_checkpoint=None if args.no_write else _writer(name, args.tag),
+                state=args.state,
             )
         figures["quick"] = args.quick
-        print(f"== {name}")
-        for key, value in figures.items():
-            print(f"  {key:32} {value}")
-        if not args.no_write:
-            print(f"  -> {_writer(name, args.tag)(figures)}")
+        _report(name, figures, args.tag, args.no_write)
+
+
+def _resume(path: Path, tag: str, no_write: bool, state: Path | None) -> None:
+    """Go on with a saved run and report it as the run itself would have."""
+
+    def checkpoint(figures: dict[str, Any]) -> object:
+        return None if no_write else _writer(figures["scenario"], tag)(figures)
+
+    figures = scenarios.resume(path, checkpoint, state)
+    figures["quick"] = False
+    figures["resumed_from"] = str(path)
+    _report(figures["scenario"], figures, tag, no_write)
+
+
+def _report(name: str, figures: dict[str, Any], tag: str, no_write: bool) -> None:
+    """Print a scenario's figures and write them (unless `no_write`)."""
+    print(f"== {name}")
+    for key, value in figures.items():
+        print(f"  {key:32} {value}")
+    if not no_write:
+        print(f"  -> {_writer(name, tag)(figures)}")
 
 
 def _writer(scenario: str, tag: str) -> Callable[[dict[str, Any]], Path]:

@@ -95,6 +95,8 @@ class Run:
     # tasks finished plus, per task still open at the end, the share of its free-flow time
     # already covered (see `open_work`)
     work: float = 0.0
+    # the simulation itself, at a cut of a long run (saved to be resumed)
+    simulation: Simulation | None = None
 
 
 def fleet_manager(
@@ -156,16 +158,21 @@ def run(
     *,
     cuts: Sequence[float] = (),
     on_cut: Callable[[Run], None] | None = None,
+    resume: Simulation | None = None,
+    after: float = 0.0,
+    wall_before: float = 0.0,
 ) -> Run:
     """Execute `seconds` of simulated time; at each of `cuts` (s, before `seconds`) hand
-    `on_cut` the run so far (a long run leaves its figures on the way)."""
-    began = time.perf_counter()
-    simulation = Simulation(manager, tasks, config)
-    for cut in sorted(c for c in cuts if 0 < c < seconds):
+    `on_cut` the run so far (a long run leaves its figures on the way). `resume` goes on with
+    a simulation saved at the cut `after` (only later cuts follow), `wall_before` the wall
+    seconds it had taken so far."""
+    began = time.perf_counter() - wall_before
+    simulation = resume or Simulation(manager, tasks, config)
+    for cut in sorted(c for c in cuts if after < c < seconds):
         stats = simulation.run(cut)
         if on_cut is not None:
             so_far = len(stats.tasks) + open_work(manager, simulation)
-            on_cut(Run(manager, stats, cut, time.perf_counter() - began, so_far))
+            on_cut(Run(manager, stats, cut, time.perf_counter() - began, so_far, simulation))
     stats = simulation.run(seconds)
     wall = time.perf_counter() - began
     work = len(stats.tasks) + open_work(manager, simulation)

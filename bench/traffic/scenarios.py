@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import gzip
 import math
+import os
+import pickle  # noqa: S403 (a saved run is the benchmark's own file)
 import random
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from bench.traffic.fleet import (
@@ -20,8 +25,9 @@ from bench.traffic.fleet import (
     run,
 )
 from bench.traffic.maps import GridMap, LorrInstance, lorr, warehouse
-from traffic.des import SimConfig
+from traffic.des import SimConfig, Simulation
 from traffic.layout import Layout
+from traffic.manager import TrafficManager
 from traffic.plans import Goal, ReleasePolicy
 
 POLICY = ReleasePolicy(max_steps=4, max_distance=4.0, braking_distance=1.0)
@@ -78,12 +84,14 @@ def warehouse_scenario(
     congestion: tuple[float, float] | None = None,
     checkpoint_hours: float | None = None,
     on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
+    state: Path | None = None,
 ) -> dict[str, Any]:
     """Vehicles start at distinct workstations and run pick -> drop orders for `hours`.
 
     `lifelong` (off for the published figures): goal refuges and stepping aside, an order done
     at its drop and the next planned from there (`traffic.aside`). Every `checkpoint_hours`
-    the figures so far go to `on_checkpoint` (the ghost's at the same cut).
+    the figures so far go to `on_checkpoint` (the ghost's at the same cut), and with `state`
+    the whole run to that file (`LongRun`, resumed by `resume`).
     """
     began = time.perf_counter()
     layout = Layout.grid(grid.free, parking=grid.stations)
@@ -135,22 +143,90 @@ def warehouse_scenario(
     tasks = WarehouseTasks(grid, seed, manager.vehicle_ids)
     tasks.standing({f"v{i}": node for i, (node, _) in enumerate(starts)})
     cuts: list[float] = []
-    checkpoints: list[dict[str, Any]] = []
-
-    def cut(so_far: Run) -> None:
-        checkpoints.append(_with_ghost(figures(so_far, seed=seed), so_far, tours))
-        if on_checkpoint is not None:
-            trail = _trail(checkpoints)
-            on_checkpoint({**checkpoints[-1], **settings, "partial": True, "checkpoints": trail})
-
     if checkpoint_hours:
         cuts = [k * checkpoint_hours * 3600 for k in range(1, math.ceil(hours / checkpoint_hours))]
-    result = run(manager, tasks, seconds, config, cuts=cuts, on_cut=cut)
-    out = _with_ghost(figures(result, seed=seed), result, tours)
-    if checkpoints:
-        out["checkpoints"] = _trail(checkpoints)
-    out.update(settings, setup_s=round(setup, 2))
-    return out
+    long_run = LongRun(manager, tasks, config, seconds, seed, settings, tours, cuts, setup)
+    return long_run.go(on_checkpoint, state)
+
+
+@dataclass
+class LongRun:
+    """A warehouse run with its ghost's tours, which can be saved at each checkpoint and
+    resumed from there in another process (`bench.traffic --state FILE`, `--resume FILE`):
+    an 8 h S3 run takes longer than one session here. The resumed run is the same run."""
+
+    manager: TrafficManager
+    tasks: WarehouseTasks
+    config: SimConfig
+    seconds: float
+    seed: int
+    settings: dict[str, Any]
+    tours: list[list[Tour]]
+    cuts: list[float]
+    setup: float
+    checkpoints: list[dict[str, Any]] = field(default_factory=list)
+    simulation: Simulation | None = None  # saved at the cut `after` (None: not begun)
+    after: float = 0.0
+    wall: float = 0.0  # wall seconds until then, over every process that ran it
+
+    def go(
+        self,
+        on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
+        state: Path | None = None,
+    ) -> dict[str, Any]:
+        """Run (on) to the end; at each cut the figures go to `on_checkpoint` and the whole
+        run to `state`."""
+
+        def cut(so_far: Run) -> None:
+            measured = figures(so_far, seed=self.seed)
+            self.checkpoints.append(_with_ghost(measured, so_far, self.tours))
+            if state is not None:
+                self.simulation, self.after = so_far.simulation, so_far.seconds
+                self.wall = so_far.wall
+                save(self, state)
+            if on_checkpoint is not None:
+                trail = _trail(self.checkpoints)
+                partial = {**self.checkpoints[-1], **self.settings, "partial": True}
+                on_checkpoint({**partial, "checkpoints": trail})
+
+        result = run(
+            self.manager,
+            self.tasks,
+            self.seconds,
+            self.config,
+            cuts=self.cuts,
+            on_cut=cut,
+            resume=self.simulation,
+            after=self.after,
+            wall_before=self.wall,
+        )
+        out = _with_ghost(figures(result, seed=self.seed), result, self.tours)
+        if self.checkpoints:
+            out["checkpoints"] = _trail(self.checkpoints)
+        out.update(self.settings, setup_s=round(self.setup, 2))
+        return out
+
+
+def save(long_run: LongRun, path: Path) -> None:
+    """Write `long_run` to `path` (replaced whole: a process stopped while writing leaves the
+    previous cut's file)."""
+    partial = path.with_name(path.name + ".part")
+    with gzip.open(partial, "wb", compresslevel=1) as f:
+        pickle.dump(long_run, f, protocol=pickle.HIGHEST_PROTOCOL)
+    os.replace(partial, path)
+
+
+def resume(
+    path: Path,
+    on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
+    state: Path | None = None,
+) -> dict[str, Any]:
+    """Go on with a run saved by `save` (the file is the project's own output, trusted)."""
+    with gzip.open(path, "rb") as f:
+        long_run = pickle.load(f)  # noqa: S301 (our own file)
+    if not isinstance(long_run, LongRun):
+        raise TypeError(f"{path} holds no saved traffic run")
+    return long_run.go(on_checkpoint, state)
 
 
 # what the results keep of each checkpoint of a long run (the whole figures go to
@@ -203,6 +279,7 @@ def s1(
     congestion: tuple[float, float] | None = None,
     checkpoint_hours: float | None = None,
     on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
+    state: Path | None = None,
 ) -> dict[str, Any]:
     """S1: warehouse-10-20-10-2-1 pattern, 100 vehicles (rho >= 0.85, plan p95 <= 25 ms)."""
     grid = warehouse()
@@ -223,6 +300,7 @@ def s1(
         congestion=congestion,
         checkpoint_hours=checkpoint_hours,
         on_checkpoint=on_checkpoint,
+        state=state,
     )
 
 
@@ -240,6 +318,7 @@ def s3(
     congestion: tuple[float, float] | None = None,
     checkpoint_hours: float | None = None,
     on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
+    state: Path | None = None,
 ) -> dict[str, Any]:
     """S3: 1,000 vehicles on a 500×140 warehouse (targets: rho >= 0.7, plan p95 <= 150 ms)."""
     grid = warehouse(block_cols=36, block_rows=45, margin=51, station_cols=8)
@@ -261,6 +340,7 @@ def s3(
         congestion=congestion,
         checkpoint_hours=checkpoint_hours,
         on_checkpoint=on_checkpoint,
+        state=state,
     )
 
 

@@ -1,8 +1,14 @@
 """A long warehouse run leaves its figures on the way (`--checkpoint-hours`): cutting the run
-changes nothing in it, and each cut is measured against the ghost at the same time. The tick
-interval (`--tick-every`) reaches the simulation."""
+changes nothing in it, each cut is measured against the ghost at the same time, and a run
+saved at a cut (`--state`) and resumed (`--resume`) is the same run. The tick interval
+(`--tick-every`) reaches the simulation."""
 
+import gzip
+import pickle
+from pathlib import Path
 from typing import Any
+
+import pytest
 
 from bench.traffic import scenarios
 from bench.traffic.fleet import Run, ghost, ghost_at, ghost_tours, run
@@ -71,3 +77,43 @@ def test_the_tick_interval_reaches_the_simulation() -> None:
     assert every_second["ticks"] == 72  # 0.02 h
     assert every_two["ticks"] == 36
     assert every_two["tick_every"] == 2.0
+
+
+def test_a_run_saved_at_a_checkpoint_and_resumed_is_the_same_run(tmp_path: Path) -> None:
+    settings: dict[str, Any] = dict(max_expansions=5_000, checkpoint_hours=0.02, switch_push=10.0)
+    whole = scenarios.warehouse_scenario("S1", SMALL, 4, 0.06, seed=1, **settings)
+    state = tmp_path / "run.pkl.gz"
+    saved: list[float] = []
+
+    def stop_after_first(figures: dict[str, Any]) -> None:
+        saved.append(figures["simulated_hours"])
+        raise _Stopped  # the session ends right after the first cut was written
+
+    with pytest.raises(_Stopped):
+        scenarios.warehouse_scenario(
+            "S1", SMALL, 4, 0.06, seed=1, state=state, on_checkpoint=stop_after_first, **settings
+        )
+    assert saved == [0.02]
+    assert state.exists()
+    written: list[dict[str, Any]] = []
+    resumed = scenarios.resume(state, written.append, state)
+    assert [w["simulated_hours"] for w in written] == [0.04]  # only the cuts after the save
+    same = ("tasks_finished", "moves", "delayed_moves", "rho", "rho_work", "switches")
+    assert {k: resumed[k] for k in same} == {k: whole[k] for k in same}
+    assert resumed["moves"] > 0
+    assert [c["moves"] for c in resumed["checkpoints"]] == [
+        c["moves"] for c in whole["checkpoints"]
+    ]
+    assert resumed["wall_s"] >= resumed["checkpoints"][0]["wall_s"]
+
+
+def test_resume_refuses_a_file_that_holds_no_run(tmp_path: Path) -> None:
+    other = tmp_path / "other.pkl.gz"
+    with gzip.open(other, "wb") as f:
+        pickle.dump({"not": "a run"}, f)
+    with pytest.raises(TypeError, match="no saved traffic run"):
+        scenarios.resume(other)
+
+
+class _Stopped(Exception):
+    pass
