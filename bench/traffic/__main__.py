@@ -2,6 +2,7 @@
 
 import argparse
 from collections.abc import Callable
+from dataclasses import replace
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -84,6 +85,12 @@ def main() -> None:
         "short leaves them; the file says partial)",
     )
     parser.add_argument(
+        "--base",
+        type=int,
+        help="S3: nodes (and metres) a base may reach ahead (default: "
+        f"{scenarios.S3_POLICY.max_steps}; S1 keeps {scenarios.POLICY.max_steps})",
+    )
+    parser.add_argument(
         "--state",
         type=Path,
         help="S1/S3 with --checkpoint-hours: save the whole run to FILE at every checkpoint "
@@ -118,6 +125,11 @@ def main() -> None:
                 delays=args.delays == "on",
             )
         else:
+            extra: dict[str, Any] = {}
+            if name == "S3" and args.base:
+                extra["base"] = replace(
+                    scenarios.S3_POLICY, max_steps=args.base, max_distance=float(args.base)
+                )
             runner = scenarios.s1 if name == "S1" else scenarios.s3
             bound: tuple[int, float] | None = (
                 scenarios.QUICK_SEARCH if name == "S1" else scenarios.S3_QUICK_SEARCH
@@ -141,6 +153,7 @@ def main() -> None:
                 checkpoint_hours=args.checkpoint_hours,
                 on_checkpoint=None if args.no_write else _writer(name, args.tag),
                 state=args.state,
+                **extra,
             )
         figures["quick"] = args.quick
         _report(name, figures, args.tag, args.no_write)

@@ -18,7 +18,7 @@ from typing import Any
 
 from bench.traffic.fleet import WarehouseTasks, fleet_manager, ghost, node_id, open_work
 from bench.traffic.maps import warehouse
-from bench.traffic.scenarios import POLICY, REASSIGN_AFTER
+from bench.traffic.scenarios import REASSIGN_AFTER, S3_POLICY
 from traffic.des import SimConfig, Simulation, free_flow_time
 from traffic.layout import Layout
 from traffic.manager import NoPlanError, TrafficManager
@@ -35,7 +35,7 @@ def _setup(
     m = fleet_manager(
         layout,
         starts,
-        policy=POLICY,
+        policy=S3_POLICY,
         max_expansions=150_000,
         quick_search=quick,
         switch_push=switch_push,
