@@ -103,6 +103,8 @@ def main() -> None:
         "--no-write and --state as given now)",
     )
     args = parser.parse_args()
+    if args.state and not (args.checkpoint_hours or args.resume):
+        parser.error("--state saves at checkpoints: give --checkpoint-hours too")
     if args.resume:
         _resume(args.resume, args.tag, args.no_write, args.state)
         return
