@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from bench.results import write
-from bench.traffic import scenarios
+from bench.traffic import long_run, scenarios
 
 
 def main() -> None:
@@ -167,7 +167,7 @@ def _resume(path: Path, tag: str, no_write: bool, state: Path | None) -> None:
     def checkpoint(figures: dict[str, Any]) -> object:
         return None if no_write else _writer(figures["scenario"], tag)(figures)
 
-    figures = scenarios.resume(path, checkpoint, state)
+    figures = long_run.resume(path, checkpoint, state)
     figures["quick"] = False
     figures["resumed_from"] = str(path)
     _report(figures["scenario"], figures, tag, no_write)

@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from bench.traffic import scenarios
+from bench.traffic import long_run, scenarios
 from bench.traffic.fleet import Run, ghost, ghost_at, ghost_tours, run
 from bench.traffic.maps import warehouse
 from tests.traffic.helpers import ListTasks, cells, manager
@@ -96,7 +96,7 @@ def test_a_run_saved_at_a_checkpoint_and_resumed_is_the_same_run(tmp_path: Path)
     assert saved == [0.02]
     assert state.exists()
     written: list[dict[str, Any]] = []
-    resumed = scenarios.resume(state, written.append, state)
+    resumed = long_run.resume(state, written.append, state)
     assert [w["simulated_hours"] for w in written] == [0.04]  # only the cuts after the save
     same = ("tasks_finished", "moves", "delayed_moves", "rho", "rho_work", "switches")
     assert {k: resumed[k] for k in same} == {k: whole[k] for k in same}
@@ -112,7 +112,7 @@ def test_resume_refuses_a_file_that_holds_no_run(tmp_path: Path) -> None:
     with gzip.open(other, "wb") as f:
         pickle.dump({"not": "a run"}, f)
     with pytest.raises(TypeError, match="no saved traffic run"):
-        scenarios.resume(other)
+        long_run.resume(other)
 
 
 class _Stopped(Exception):
