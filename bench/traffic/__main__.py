@@ -85,6 +85,12 @@ def main() -> None:
         "short leaves them; the file says partial)",
     )
     parser.add_argument(
+        "--cuts-here",
+        action="store_true",
+        help="S1/S3 with --checkpoint-hours: measure and save each cut in this process "
+        "(default: in a forked one, on the other core, while this one drives on)",
+    )
+    parser.add_argument(
         "--base",
         type=int,
         help="S3: nodes (and metres) a base may reach ahead (default: "
@@ -106,7 +112,7 @@ def main() -> None:
     if args.state and not (args.checkpoint_hours or args.resume):
         parser.error("--state saves at checkpoints: give --checkpoint-hours too")
     if args.resume:
-        _resume(args.resume, args.tag, args.no_write, args.state)
+        _resume(args.resume, args.tag, args.no_write, args.state, aside=not args.cuts_here)
         return
     chosen = args.scenario or ["S1", "S2", "S3"]
     for name in chosen:
@@ -155,19 +161,20 @@ def main() -> None:
                 checkpoint_hours=args.checkpoint_hours,
                 on_checkpoint=None if args.no_write else _writer(name, args.tag),
                 state=args.state,
+                aside=not args.cuts_here,
                 **extra,
             )
         figures["quick"] = args.quick
         _report(name, figures, args.tag, args.no_write)
 
 
-def _resume(path: Path, tag: str, no_write: bool, state: Path | None) -> None:
+def _resume(path: Path, tag: str, no_write: bool, state: Path | None, *, aside: bool) -> None:
     """Go on with a saved run and report it as the run itself would have."""
 
     def checkpoint(figures: dict[str, Any]) -> object:
         return None if no_write else _writer(figures["scenario"], tag)(figures)
 
-    figures = long_run.resume(path, checkpoint, state)
+    figures = long_run.resume(path, checkpoint, state, aside=aside)
     figures["quick"] = False
     figures["resumed_from"] = str(path)
     _report(figures["scenario"], figures, tag, no_write)

@@ -6,14 +6,19 @@ from __future__ import annotations
 import gzip
 import os
 import pickle  # noqa: S403 (a saved run is the benchmark's own file)
+import traceback
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from bench.traffic.fleet import Run, Tour, WarehouseTasks, figures, ghost_at, run
 from traffic.des import SimConfig, Simulation
+from traffic.footprint import VehicleClass
+from traffic.layout import Layout
 from traffic.manager import TrafficManager
+from traffic.sipp import ClassGraph
 
 
 @dataclass
@@ -40,13 +45,18 @@ class LongRun:
         self,
         on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
         state: Path | None = None,
+        *,
+        aside: bool = False,
     ) -> dict[str, Any]:
         """Run (on) to the end; at each cut the figures go to `on_checkpoint` and the whole
-        run to `state`."""
+        run to `state`. With `aside` a forked process measures and saves each cut while this
+        one drives on: on S3 a cut's figures take minutes of free-flow searches and its save
+        a minute, a fifth of the run on one core (the figures are the same either way)."""
+        pending: _Child | None = None
 
-        def cut(so_far: Run) -> None:
-            measured = figures(so_far, seed=self.seed)
-            self.checkpoints.append(_with_ghost(measured, so_far, self.tours))
+        def keep(so_far: Run) -> dict[str, Any]:
+            measured = _with_ghost(figures(so_far, seed=self.seed), so_far, self.tours)
+            self.checkpoints.append(measured)
             if state is not None:
                 self.simulation, self.after = so_far.simulation, so_far.seconds
                 self.wall = so_far.wall
@@ -55,18 +65,36 @@ class LongRun:
                 trail = _trail(self.checkpoints)
                 partial = {**self.checkpoints[-1], **self.settings, "partial": True}
                 on_checkpoint({**partial, "checkpoints": trail})
+            return measured
 
-        result = run(
-            self.manager,
-            self.tasks,
-            self.seconds,
-            self.config,
-            cuts=self.cuts,
-            on_cut=cut,
-            resume=self.simulation,
-            after=self.after,
-            wall_before=self.wall,
-        )
+        def collect() -> None:
+            nonlocal pending
+            if pending is not None:
+                self.checkpoints.append(pending.wait())
+                pending = None
+
+        def cut(so_far: Run) -> None:
+            nonlocal pending
+            collect()  # the previous cut's child is long done: cuts are simulated hours apart
+            if aside:
+                pending = _Child.start(partial(keep, so_far))
+            else:
+                keep(so_far)
+
+        try:
+            result = run(
+                self.manager,
+                self.tasks,
+                self.seconds,
+                self.config,
+                cuts=self.cuts,
+                on_cut=cut,
+                resume=self.simulation,
+                after=self.after,
+                wall_before=self.wall,
+            )
+        finally:
+            collect()
         out = _with_ghost(figures(result, seed=self.seed), result, self.tours)
         if self.checkpoints:
             out["checkpoints"] = _trail(self.checkpoints)
@@ -74,12 +102,56 @@ class LongRun:
         return out
 
 
+class _Child:
+    """A forked process that works out one value (a cut's figures) and pipes it back."""
+
+    def __init__(self, pid: int, pipe: int) -> None:
+        self.pid, self.pipe = pid, pipe
+
+    @classmethod
+    def start(cls, work: Callable[[], object]) -> _Child:
+        """Fork; the child runs `work`, sends its result and exits."""
+        read, write = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the child: never returns into the run
+            os.close(read)
+            code = 1
+            try:
+                with os.fdopen(write, "wb") as out:
+                    pickle.dump(work(), out)
+                code = 0
+            except BaseException:  # noqa: BLE001 (reported, then the child exits)
+                traceback.print_exc()
+            finally:
+                os._exit(code)
+        os.close(write)
+        return cls(pid, read)
+
+    def wait(self) -> Any:
+        """The child's result (it is read before waiting: a large one fills the pipe)."""
+        with os.fdopen(self.pipe, "rb") as pipe:
+            data = pipe.read()
+        _, status = os.waitpid(self.pid, 0)
+        if os.waitstatus_to_exitcode(status) != 0 or not data:
+            raise RuntimeError("a cut measured aside failed (its traceback is printed above)")
+        return pickle.loads(data)  # noqa: S301 (our own child's)
+
+
 def save(long_run: LongRun, path: Path) -> None:
     """Write `long_run` to `path` (replaced whole: a process stopped while writing leaves the
-    previous cut's file)."""
+    previous cut's file).
+
+    The vehicle classes' graphs (`ClassGraph`, over half of an S3 file) are left out and
+    rebuilt from the layout on `resume`: a file small enough to keep between sessions.
+    """
     partial = path.with_name(path.name + ".part")
+    graphs = long_run.manager.graphs
     with gzip.open(partial, "wb", compresslevel=1) as f:
-        pickle.dump(long_run, f, protocol=pickle.HIGHEST_PROTOCOL)
+        saver = _Saver(f)
+        # one pickler, one memo: the layout written with the header is the run's own
+        saver.dump(_Header(long_run.manager.layout, [(g.vehicle, g._cache) for g in graphs]))
+        saver.graphs = {id(g): i for i, g in enumerate(graphs)}
+        saver.dump(long_run)
     os.replace(partial, path)
 
 
@@ -87,13 +159,55 @@ def resume(
     path: Path,
     on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
     state: Path | None = None,
+    *,
+    aside: bool = False,
 ) -> dict[str, Any]:
     """Go on with a run saved by `save` (the file is the project's own output, trusted)."""
+    return load(path).go(on_checkpoint, state, aside=aside)
+
+
+def load(path: Path) -> LongRun:
+    """The run saved in `path`, its graphs rebuilt (a file of the nineteenth round, pickled
+    whole with them, loads as well)."""
     with gzip.open(path, "rb") as f:
-        long_run = pickle.load(f)  # noqa: S301 (our own file)
-    if not isinstance(long_run, LongRun):
+        loader = _Loader(f)
+        first = loader.load()
+        if isinstance(first, _Header):
+            loader.graphs = [ClassGraph(first.layout, v, cache=c) for v, c in first.graphs]
+            first = loader.load()
+    if not isinstance(first, LongRun):
         raise TypeError(f"{path} holds no saved traffic run")
-    return long_run.go(on_checkpoint, state)
+    return first
+
+
+@dataclass
+class _Header:
+    """What a saved run's graphs are rebuilt from: the layout, each class with its cache size."""
+
+    layout: Layout
+    graphs: list[tuple[VehicleClass, int]]
+
+
+class _Saver(pickle.Pickler):
+    """Pickles each graph in `graphs` (by id, set after the header) as its index."""
+
+    def __init__(self, file: gzip.GzipFile) -> None:
+        super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
+        self.graphs: dict[int, int] = {}
+
+    def persistent_id(self, obj: object) -> int | None:
+        return self.graphs.get(id(obj))
+
+
+class _Loader(pickle.Unpickler):
+    """Reads a graph index back as the graph rebuilt from the header."""
+
+    graphs: list[ClassGraph] = []
+
+    def persistent_load(self, pid: object) -> ClassGraph:
+        if not isinstance(pid, int) or not 0 <= pid < len(self.graphs):
+            raise pickle.UnpicklingError(f"no graph {pid!r} in this saved run")
+        return self.graphs[pid]
 
 
 # what the results keep of each checkpoint of a long run (the whole figures go to

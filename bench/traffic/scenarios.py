@@ -84,6 +84,7 @@ def warehouse_scenario(
     checkpoint_hours: float | None = None,
     on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
     state: Path | None = None,
+    aside: bool = False,
 ) -> dict[str, Any]:
     """Vehicles start at distinct workstations and run pick -> drop orders for `hours`.
 
@@ -147,7 +148,7 @@ def warehouse_scenario(
     if checkpoint_hours:
         cuts = [k * checkpoint_hours * 3600 for k in range(1, math.ceil(hours / checkpoint_hours))]
     long_run = LongRun(manager, tasks, config, seconds, seed, settings, tours, cuts, setup)
-    return long_run.go(on_checkpoint, state)
+    return long_run.go(on_checkpoint, state, aside=aside)
 
 
 def s1(
@@ -165,6 +166,7 @@ def s1(
     checkpoint_hours: float | None = None,
     on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
     state: Path | None = None,
+    aside: bool = False,
 ) -> dict[str, Any]:
     """S1: warehouse-10-20-10-2-1 pattern, 100 vehicles (rho >= 0.85, plan p95 <= 25 ms)."""
     grid = warehouse()
@@ -186,6 +188,7 @@ def s1(
         checkpoint_hours=checkpoint_hours,
         on_checkpoint=on_checkpoint,
         state=state,
+        aside=aside,
     )
 
 
@@ -204,6 +207,7 @@ def s3(
     checkpoint_hours: float | None = None,
     on_checkpoint: Callable[[dict[str, Any]], object] | None = None,
     state: Path | None = None,
+    aside: bool = False,
     base: ReleasePolicy | None = None,
 ) -> dict[str, Any]:
     """S3: 1,000 vehicles on a 500×140 warehouse (targets: rho >= 0.7, plan p95 <= 150 ms);
@@ -229,6 +233,7 @@ def s3(
         checkpoint_hours=checkpoint_hours,
         on_checkpoint=on_checkpoint,
         state=state,
+        aside=aside,
     )
 
 

@@ -107,6 +107,68 @@ def test_a_run_saved_at_a_checkpoint_and_resumed_is_the_same_run(tmp_path: Path)
     assert resumed["wall_s"] >= resumed["checkpoints"][0]["wall_s"]
 
 
+def test_a_saved_run_leaves_its_graphs_out_and_a_run_pickled_whole_still_resumes(
+    tmp_path: Path,
+) -> None:
+    settings: dict[str, Any] = dict(max_expansions=5_000, checkpoint_hours=0.02)
+    state = tmp_path / "run.pkl.gz"
+
+    def stop(figures: dict[str, Any]) -> None:
+        raise _Stopped
+
+    with pytest.raises(_Stopped):
+        scenarios.warehouse_scenario(
+            "S1", SMALL, 4, 0.04, seed=2, state=state, on_checkpoint=stop, **settings
+        )
+    saved = long_run.load(state)
+    graph = saved.manager.graphs[0]
+    assert graph.layout is saved.manager.layout  # rebuilt from the saved layout
+    assert saved.simulation is not None
+    assert saved.simulation.manager is saved.manager
+    whole = tmp_path / "whole.pkl.gz"  # as the nineteenth round wrote it: graphs and all
+    with gzip.open(whole, "wb") as f:
+        pickle.dump(saved, f, protocol=pickle.HIGHEST_PROTOCOL)
+    assert b"ClassGraph" in gzip.decompress(whole.read_bytes())
+    assert b"ClassGraph" not in gzip.decompress(state.read_bytes())
+    assert state.stat().st_size < whole.stat().st_size
+    same = ("tasks_finished", "moves", "delayed_moves", "rho_work")
+    from_state, from_whole = long_run.resume(state), long_run.resume(whole)
+    assert {k: from_state[k] for k in same} == {k: from_whole[k] for k in same}
+    assert from_state["moves"] > saved.checkpoints[-1]["moves"]
+
+
+def test_cuts_measured_aside_give_the_same_figures_and_state(tmp_path: Path) -> None:
+    settings: dict[str, Any] = dict(max_expansions=5_000, checkpoint_hours=0.02)
+    here = scenarios.warehouse_scenario("S1", SMALL, 4, 0.06, seed=1, **settings)
+    state = tmp_path / "run.pkl.gz"
+    written: list[dict[str, Any]] = []  # in the child: nothing comes back this way
+    aside = scenarios.warehouse_scenario(
+        "S1", SMALL, 4, 0.06, seed=1, state=state, on_checkpoint=written.append, aside=True,
+        **settings,
+    )  # fmt: skip
+    assert written == []
+    keys = [k for k in long_run.CHECKPOINT_KEYS if k != "wall_s"]
+    assert [[c[k] for k in keys] for c in aside["checkpoints"]] == [
+        [c[k] for k in keys] for c in here["checkpoints"]
+    ]
+    assert len(aside["checkpoints"]) == 2
+    assert aside["tasks_finished"] == here["tasks_finished"]
+    saved = long_run.load(state)  # written by the second cut's child
+    assert saved.after == 0.04 * 3600
+    assert [c["moves"] for c in saved.checkpoints] == [c["moves"] for c in here["checkpoints"]]
+
+
+def test_a_cut_that_fails_aside_stops_the_run() -> None:
+    def broken(figures: dict[str, Any]) -> None:
+        raise OSError("disk full")
+
+    with pytest.raises(RuntimeError, match="measured aside failed"):
+        scenarios.warehouse_scenario(
+            "S1", SMALL, 4, 0.04, seed=1, max_expansions=5_000, checkpoint_hours=0.02,
+            on_checkpoint=broken, aside=True,
+        )  # fmt: skip
+
+
 def test_resume_refuses_a_file_that_holds_no_run(tmp_path: Path) -> None:
     other = tmp_path / "other.pkl.gz"
     with gzip.open(other, "wb") as f:
