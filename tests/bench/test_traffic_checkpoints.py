@@ -131,9 +131,13 @@ def test_a_saved_run_leaves_its_graphs_out_and_a_run_pickled_whole_still_resumes
     assert b"ClassGraph" in gzip.decompress(whole.read_bytes())
     assert b"ClassGraph" not in gzip.decompress(state.read_bytes())
     assert state.stat().st_size < whole.stat().st_size
+    kept = tmp_path / "run.pkl.xz"  # the smaller file kept between sessions
+    long_run.save(saved, kept)
+    assert kept.read_bytes()[:6] == b"\xfd7zXZ\x00"
     same = ("tasks_finished", "moves", "delayed_moves", "rho_work")
     from_state, from_whole = long_run.resume(state), long_run.resume(whole)
     assert {k: from_state[k] for k in same} == {k: from_whole[k] for k in same}
+    assert {k: long_run.resume(kept)[k] for k in same} == {k: from_state[k] for k in same}
     assert from_state["moves"] > saved.checkpoints[-1]["moves"]
 
 
