@@ -273,7 +273,10 @@ def main() -> None:
     parser.add_argument("source", type=Path)
     parser.add_argument("target", type=Path)
     args = parser.parse_args()
-    save(load(args.source), args.target)
+    # run as __main__ this module is a second copy: the saved run's classes are the package's
+    from bench.traffic import long_run
+
+    long_run.save(long_run.load(args.source), args.target)
     print(f"{args.target}: {args.target.stat().st_size / 1e6:.1f} MB")
 
 

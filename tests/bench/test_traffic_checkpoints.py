@@ -5,6 +5,8 @@ saved at a cut (`--state`) and resumed (`--resume`) is the same run. The tick in
 
 import gzip
 import pickle
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -171,6 +173,30 @@ def test_a_cut_that_fails_aside_stops_the_run() -> None:
             "S1", SMALL, 4, 0.04, seed=1, max_expansions=5_000, checkpoint_hours=0.02,
             on_checkpoint=broken, aside=True,
         )  # fmt: skip
+
+
+def test_the_command_line_re_saves_a_run_as_xz(tmp_path: Path) -> None:
+    state = tmp_path / "run.pkl.gz"
+
+    def stop(figures: dict[str, Any]) -> None:
+        raise _Stopped
+
+    with pytest.raises(_Stopped):
+        scenarios.warehouse_scenario(
+            "S1", SMALL, 4, 0.04, seed=2, max_expansions=5_000, checkpoint_hours=0.02,
+            state=state, on_checkpoint=stop,
+        )  # fmt: skip
+    kept = tmp_path / "kept.pkl.xz"
+    done = subprocess.run(  # noqa: S603 (our own module)
+        [sys.executable, "-m", "bench.traffic.long_run", str(state), str(kept)],
+        cwd=Path(__file__).resolve().parents[2],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "kept.pkl.xz" in done.stdout
+    assert long_run.load(kept).after == long_run.load(state).after == 0.02 * 3600
 
 
 def test_resume_refuses_a_file_that_holds_no_run(tmp_path: Path) -> None:
