@@ -18,7 +18,7 @@ from typing import Any
 
 from bench.traffic.fleet import WarehouseTasks, fleet_manager, ghost, node_id, open_work
 from bench.traffic.maps import warehouse
-from bench.traffic.scenarios import REASSIGN_AFTER, S3_POLICY
+from bench.traffic.scenarios import REASSIGN_AFTER, S3_POLICY, S3_QUICK_SEARCH
 from traffic.des import SimConfig, Simulation, free_flow_time
 from traffic.layout import Layout
 from traffic.manager import NoPlanError, TrafficManager
@@ -31,7 +31,7 @@ def _setup(
     layout = Layout.grid(grid.free, parking=grid.stations)
     rng = random.Random(1)
     starts = [(node_id(c), 0.0) for c in rng.sample(list(grid.stations), vehicles)]
-    quick = None if fallback is None else (1_000, fallback)
+    quick = None if fallback is None else (S3_QUICK_SEARCH[0], fallback)  # S3's expansions
     m = fleet_manager(
         layout,
         starts,
