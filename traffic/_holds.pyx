@@ -10,7 +10,7 @@
 cimport cython
 from cpython.object cimport PyObject
 from libcpp.algorithm cimport pop_heap, push_heap
-from libcpp.unordered_set cimport unordered_set
+from libc.stdint cimport uint64_t
 from libcpp.vector cimport vector
 
 
@@ -71,14 +71,45 @@ cdef inline Step _heap_pop(vector[Step]& heap) noexcept:
     return top
 
 
-ctypedef unordered_set[PyObject*] Marked
+cdef struct Marked:
+    # the conflict tuples done in this call of `propagate`, by address: an open-addressing set
+    # (linear probing, a power-of-two table at most half full); std::unordered_set's prime
+    # modulo and node per insert were two thirds of `_mark`
+    vector[PyObject*] slots
+    size_t count
+    int bits
+
+
+cdef inline bint _first_time(Marked& done, PyObject* item) noexcept:
+    """Whether `item` is new to `done` (it is then added)."""
+    cdef size_t size, mask, slot, k
+    cdef vector[PyObject*] old
+    if 2 * (done.count + 1) > done.slots.size():  # grow (first use: 64 slots)
+        old.swap(done.slots)
+        done.bits = 6 if done.bits == 0 else done.bits + 1
+        done.slots.assign(<size_t>1 << done.bits, NULL)
+        done.count = 0
+        for k in range(old.size()):
+            if old[k] != NULL:
+                _first_time(done, old[k])
+    mask = done.slots.size() - 1
+    # Fibonacci hashing of the address (objects are 16-byte aligned: the low bits say little)
+    slot = <size_t>(((<uint64_t><size_t>item >> 4) * <uint64_t>11400714819323198485ULL)
+                    >> (64 - done.bits))
+    while done.slots[slot] != NULL:
+        if done.slots[slot] == item:
+            return False
+        slot = (slot + 1) & mask
+    done.slots[slot] = item
+    done.count += 1
+    return True
 
 
 cdef inline void _mark(set marks, Marked& done, tuple conflicts) except *:
     """Add the resources of `conflicts` to `marks`, once per call of `propagate`: the sets
     only grow during a call, and a conflict tuple is shared by every hold of one vehicle class
     on one resource (`traffic.footprint.ConflictSets`), so its address says it is done."""
-    if not done.insert(<PyObject*>conflicts).second:
+    if not _first_time(done, <PyObject*>conflicts):
         return
     for r in conflicts:
         marks.add(r)
@@ -113,6 +144,8 @@ def propagate(vehicles, table, graphs, pushes, double leave=-1.0):
     cdef vector[Step] heap
     cdef Step item, entry
     cdef Marked marked_unsorted, marked_stale
+    marked_unsorted.count = marked_stale.count = 0
+    marked_unsorted.bits = marked_stale.bits = 0
     cdef list fleet = vehicles
     cdef set unsorted = table.unsorted, stale = table._stale
     cdef list blocked = table.blocked
