@@ -82,7 +82,7 @@ cdef struct Marked:
 
 cdef inline bint _first_time(Marked& done, PyObject* item) noexcept:
     """Whether `item` is new to `done` (it is then added)."""
-    cdef size_t size, mask, slot, k
+    cdef size_t mask, slot, k
     cdef vector[PyObject*] old
     if 2 * (done.count + 1) > done.slots.size():  # grow (first use: 64 slots)
         old.swap(done.slots)

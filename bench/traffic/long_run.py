@@ -218,9 +218,11 @@ class _Saver(pickle.Pickler):
 
 
 class _Loader(pickle.Unpickler):
-    """Reads a graph index back as the graph rebuilt from the header."""
+    """Reads a graph index back as the graph rebuilt from the header (set after reading it)."""
 
-    graphs: list[ClassGraph] = []
+    def __init__(self, file: BinaryIO) -> None:
+        super().__init__(file)
+        self.graphs: list[ClassGraph] = []
 
     def persistent_load(self, pid: object) -> ClassGraph:
         if not isinstance(pid, int) or not 0 <= pid < len(self.graphs):

@@ -112,16 +112,7 @@ def test_a_run_saved_at_a_checkpoint_and_resumed_is_the_same_run(tmp_path: Path)
 def test_a_saved_run_leaves_its_graphs_out_and_a_run_pickled_whole_still_resumes(
     tmp_path: Path,
 ) -> None:
-    settings: dict[str, Any] = dict(max_expansions=5_000, checkpoint_hours=0.02)
-    state = tmp_path / "run.pkl.gz"
-
-    def stop(figures: dict[str, Any]) -> None:
-        raise _Stopped
-
-    with pytest.raises(_Stopped):
-        scenarios.warehouse_scenario(
-            "S1", SMALL, 4, 0.04, seed=2, state=state, on_checkpoint=stop, **settings
-        )
+    state = _saved_at_first_cut(tmp_path)
     saved = long_run.load(state)
     graph = saved.manager.graphs[0]
     assert graph.layout is saved.manager.layout  # rebuilt from the saved layout
@@ -176,16 +167,7 @@ def test_a_cut_that_fails_aside_stops_the_run() -> None:
 
 
 def test_the_command_line_re_saves_a_run_as_xz(tmp_path: Path) -> None:
-    state = tmp_path / "run.pkl.gz"
-
-    def stop(figures: dict[str, Any]) -> None:
-        raise _Stopped
-
-    with pytest.raises(_Stopped):
-        scenarios.warehouse_scenario(
-            "S1", SMALL, 4, 0.04, seed=2, max_expansions=5_000, checkpoint_hours=0.02,
-            state=state, on_checkpoint=stop,
-        )  # fmt: skip
+    state = _saved_at_first_cut(tmp_path)
     kept = tmp_path / "kept.pkl.xz"
     done = subprocess.run(  # noqa: S603 (our own module)
         [sys.executable, "-m", "bench.traffic.long_run", str(state), str(kept)],
@@ -209,3 +191,18 @@ def test_resume_refuses_a_file_that_holds_no_run(tmp_path: Path) -> None:
 
 class _Stopped(Exception):
     pass
+
+
+def _saved_at_first_cut(tmp_path: Path) -> Path:
+    """A small S1 run (0.04 h) whose session ended right after its first cut (0.02 h) was saved."""
+    state = tmp_path / "run.pkl.gz"
+
+    def stop(figures: dict[str, Any]) -> None:
+        raise _Stopped
+
+    with pytest.raises(_Stopped):
+        scenarios.warehouse_scenario(
+            "S1", SMALL, 4, 0.04, seed=2, max_expansions=5_000, checkpoint_hours=0.02,
+            state=state, on_checkpoint=stop,
+        )  # fmt: skip
+    return state
