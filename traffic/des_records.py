@@ -123,6 +123,14 @@ class Timings:
                 return min(self.max, self.GROWTH**bucket)
         return self.max
 
+    def count_over(self, seconds: float) -> int:
+        """How many samples exceeded `seconds`, to the bucket: those in the bucket holding
+        `seconds` (at most 1 % above it) are not counted."""
+        if seconds <= 0.0:
+            return self.count - self.zeros
+        edge = math.ceil(math.log(seconds) / self._LOG)
+        return sum(n for bucket, n in self.buckets.items() if bucket > edge)
+
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Timings):
             return NotImplemented

@@ -8,7 +8,10 @@ release extends over the longest prefix whose holds have no other vehicle queued
 `traffic.reservations`), capped by the `ReleasePolicy`. A vehicle stopped by another one's hold
 is noted as its waiter and re-checked when that vehicle progresses or is planned anew; with
 `switching` a vehicle stopped at its decision point by a late vehicle's unreleased hold may go
-ahead of it first (`traffic.switching`).
+ahead of it first (`traffic.switching`). Switches are not tried on a state message: one that
+pushes the vehicles going behind re-times them through `propagate`, up to tens of milliseconds
+on a busy layout, so the stopped vehicle is left waiting and the next `tick` (which re-checks
+every waiting vehicle) tries the switch: it waits at most one tick longer.
 """
 
 from __future__ import annotations
@@ -47,10 +50,10 @@ class Execution(Switching):
             if stop == passed:
                 v.ready_at = now + goal[1]
         releases: list[Release] = []
-        own = self._extend(v, now)
+        own = self._extend(v, now, switch=False)
         if own is not None:
             releases.append(own)
-        releases.extend(self._wake(v.idx, now))
+        releases.extend(self._wake(v.idx, now, switch=False))
         return releases
 
     def on_leave(self, vehicle_id: str, now: float) -> list[Release]:
@@ -64,10 +67,11 @@ class Execution(Switching):
             return []
         self.table.remove(v.node_holds[p])
         v.left = p
-        return self._wake(v.idx, now)
+        return self._wake(v.idx, now, switch=False)
 
-    def _extend(self, v: Vehicle, now: float) -> Release | None:
-        """Extend the base over the longest releasable prefix within the policy's caps."""
+    def _extend(self, v: Vehicle, now: float, *, switch: bool = True) -> Release | None:
+        """Extend the base over the longest releasable prefix within the policy's caps; with
+        `switch` (and `switching` on) a vehicle stopped at its decision point may switch."""
         last = min(len(v.route) - 1, v.hold_at)
         b = start = v.base
         table, policy = self.table, self.policy
@@ -83,6 +87,7 @@ class Execution(Switching):
             blocker = (table.blocker(edge) if edge is not None else None) or table.blocker(node)
             switched = (
                 blocker is not None
+                and switch
                 and self.switching
                 and b == v.passed
                 and self._switch(v, blocker, now)
@@ -104,11 +109,11 @@ class Execution(Switching):
         v.base = b
         return Release(v.name, v.plan_id, b, len(v.route) - 1)
 
-    def _wake(self, idx: int, now: float) -> list[Release]:
+    def _wake(self, idx: int, now: float, *, switch: bool = True) -> list[Release]:
         """Re-check the vehicles that waited for vehicle `idx`."""
         releases = []
         for w in self._waiters.pop(idx, ()):
-            release = self._extend(self._vehicles[w], now)
+            release = self._extend(self._vehicles[w], now, switch=switch)
             if release is not None:
                 releases.append(release)
         return releases

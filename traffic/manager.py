@@ -328,7 +328,8 @@ class TrafficManager(Commit):
         `budget` vehicles stopped at their decision point for `replan_after` seconds get their
         unreleased steps re-planned, which may let them pass ahead of a late vehicle.
         Every waiting vehicle's base is re-checked first (microseconds each): a safety net so
-        that a wake-up missed by the event path costs a vehicle at most one tick. A re-plan
+        that a wake-up missed by the event path costs a vehicle at most one tick, and where
+        switches are tried (`switching`; never on a state message, `traffic.execution`). A re-plan
         that ends a route where the vehicle stands returns its release with `base_end ==
         route_end`: its route (order) is done there.
         """

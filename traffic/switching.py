@@ -37,7 +37,8 @@ at k waiting for one of them (each would wait for the other); if step 2's check 
 (a side effect of the pushes on a third vehicle), the switch is dropped and the pushes stay,
 like any re-timing. A switch is made only when W's first step can then be released at once,
 so each switch moves a vehicle (no two vehicles switch back and forth without progress), and
-a vehicle tries at most once per `SWITCH_EVERY` seconds.
+a vehicle tries at most once per `SWITCH_EVERY` seconds. Switches are tried in `tick()` and
+when a plan is committed, never on a state message (`traffic.execution`).
 """
 
 from __future__ import annotations

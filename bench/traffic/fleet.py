@@ -322,6 +322,10 @@ def figures(result: Run, *, sample: int = 1500, seed: int = 0) -> dict[str, Any]
         "plan_cpu_ms_max": _round(max(plan_cpu_ms, default=0.0)),
         "release_cpu_us_p95": _round(release_cpu_us.percentile(95) * 1e6),
         "release_cpu_us_p99": _round(release_cpu_us.percentile(99) * 1e6),
+        "release_cpu_us_p99_9": _round(release_cpu_us.percentile(99.9) * 1e6),
+        "release_cpu_us_max": _round(release_cpu_us.max * 1e6),
+        # the target is 1 ms per state message: how many took longer (CPU, to 1 %)
+        "release_cpu_over_1ms": release_cpu_us.count_over(1e-3),
         "tick_cpu_ms_p50": _round(_pct(tick_cpu_ms, 50)),
         "tick_cpu_ms_p95": _round(_pct(tick_cpu_ms, 95)),
         "ticks": len(tick_cpu_ms),

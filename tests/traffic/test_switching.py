@@ -19,7 +19,7 @@ from tests.traffic.test_deadlock_property import assert_all_done_safely, delayed
 from traffic.des import SimConfig, Simulation
 from traffic.layout import Layout
 from traffic.manager import TrafficManager
-from traffic.plans import ReleasePolicy
+from traffic.plans import Release, ReleasePolicy
 
 EPS = 1e-6
 # a lane (row 0) with a bay below each end: a drives the lane east, b comes the other way
@@ -145,6 +145,28 @@ def test_a_delayed_warehouse_run_switches_and_keeps_the_schedule_consistent() ->
     stats = ScheduleChecked(m, tasks, config).run(600.0)
     assert len(stats.tasks) > 30
     assert (stats.collisions, stats.wait_cycles, stats.stalls) == (0, 0, 0)
+    assert m.switches > 5
+    assert m.switch_pushes > 0
+
+
+def test_state_messages_leave_switches_to_the_next_tick() -> None:
+    """A switch that pushes re-times other vehicles (milliseconds on a busy layout): no state
+    message makes one; the waiting vehicle switches at the next tick instead."""
+    m, tasks = small_warehouse(seed=0)
+    on_progress, switched_on_progress = m.on_progress, []
+
+    def counted(vehicle_id: str, passed: int, now: float) -> list[Release]:
+        before = m.switches, m.switch_pushes
+        releases = on_progress(vehicle_id, passed, now)
+        switched_on_progress.append((m.switches, m.switch_pushes) != before)
+        return releases
+
+    m.on_progress = counted  # type: ignore[method-assign]
+    config = SimConfig(seed=0, retry_backoff=2.0, reassign_after=3)
+    stats = Simulation(m, tasks, config).run(600.0)
+    assert (stats.collisions, stats.wait_cycles, stats.stalls) == (0, 0, 0)
+    assert len(switched_on_progress) > 1000
+    assert not any(switched_on_progress)
     assert m.switches > 5
     assert m.switch_pushes > 0
 

@@ -30,6 +30,15 @@ def test_a_percentile_is_the_sorted_samples_one_at_most_a_bucket_high(
     assert len(timings) == len(values)
 
 
+@given(durations, st.floats(min_value=1e-6, max_value=1.0))
+def test_the_count_over_a_limit_misses_only_samples_within_a_bucket_of_it(
+    values: list[float], limit: float
+) -> None:
+    counted = Timings(values).count_over(limit)
+    assert sum(v > limit * Timings.GROWTH**2 for v in values) <= counted
+    assert counted <= sum(v > limit for v in values)
+
+
 def test_count_sum_and_maximum_are_exact() -> None:
     timings = Timings([0.001, 0.002, 0.0])
     assert (timings.count, timings.zeros, timings.max) == (3, 1, 0.002)
