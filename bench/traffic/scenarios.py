@@ -340,6 +340,9 @@ def s2(
                 f"{key}_switches": figs["switches"],
                 f"{key}_plan_ms_p95": figs["plan_ms_p95"],
                 f"{key}_release_us_p95": figs["release_us_p95"],
+                f"{key}_release_cpu_us_p99": figs["release_cpu_us_p99"],
+                f"{key}_release_cpu_us_max": figs["release_cpu_us_max"],
+                f"{key}_release_cpu_over_1ms": figs["release_cpu_over_1ms"],
                 f"{key}_wall_s": figs["wall_s"],
             }
         )
