@@ -9,9 +9,9 @@ release extends over the longest prefix whose holds have no other vehicle queued
 is noted as its waiter and re-checked when that vehicle progresses or is planned anew; with
 `switching` a vehicle stopped at its decision point by a late vehicle's unreleased hold may go
 ahead of it first (`traffic.switching`). Switches are not tried on a state message: one that
-pushes the vehicles going behind re-times them through `propagate`, up to tens of milliseconds
-on a busy layout, so the stopped vehicle is left waiting and the next `tick` (which re-checks
-every waiting vehicle) tries the switch: it waits at most one tick longer.
+pushes the vehicles going behind re-times them through `propagate` (up to 150 ms on S3, 1,000
+vehicles), so the stopped vehicle is left waiting and the next `tick` (which re-checks every
+waiting vehicle) tries the switch: it waits at most one tick longer.
 """
 
 from __future__ import annotations
