@@ -1,7 +1,9 @@
-"""`python -m bench.traffic.release_tail STATE [--seconds S] [--repeat N]`: the release
-decision's own cost per state message, told apart from the machine's interruptions.
+"""`python -m bench.traffic.release_tail STATE | --s2 INSTANCE [--delays] [--seconds S]
+[--repeat N]`: the release decision's own cost per state message, told apart from the
+machine's interruptions.
 
-A run saved by `bench.traffic --state` is driven on `seconds` simulated seconds `repeat` times,
+A run saved by `bench.traffic --state` (S1, S3) is driven on `seconds` simulated seconds, or an
+S2 instance (whose runs are not saved) from its start, `repeat` times,
 each in a process of its own (two at a time, the cores here). The simulation is deterministic,
 so every repeat makes the same `on_progress` calls in the same order (checked); a call's
 smallest CPU time over the repeats is its cost with the machine's interruptions mostly gone (a
@@ -21,7 +23,9 @@ from pathlib import Path
 from typing import Any
 
 from bench.results import write
+from bench.traffic import scenarios
 from bench.traffic.long_run import load
+from traffic.des import Simulation
 from traffic.plans import Release
 
 LIMIT = 1e-3  # s: the target per state message (issue 6)
@@ -38,12 +42,33 @@ class Repeat:
     cpu: array[float]
 
 
-def drive(state: Path, seconds: float) -> Repeat:
-    """Load `state` and drive it on `seconds`, timing every state message's decision."""
-    saved = load(state)
-    simulation = saved.simulation
-    if simulation is None:
-        raise ValueError(f"{state} holds a run that has not begun")
+@dataclass(frozen=True)
+class S2Start:
+    """An S2 instance from its start, in the benchmark's lifelong mode (seed 1)."""
+
+    instance: str
+    delays: bool = False
+
+
+Source = Path | S2Start  # a saved run, or an S2 instance
+
+
+def start(source: Source) -> tuple[Simulation, float]:
+    """The simulation to drive and the simulated time it stands at."""
+    if isinstance(source, S2Start):
+        instance, manager, config = scenarios.s2_setup(
+            source.instance, seed=1, delays=source.delays
+        )
+        return Simulation(manager, scenarios.LorrTasks(instance), config), 0.0
+    saved = load(source)
+    if saved.simulation is None:
+        raise ValueError(f"{source} holds a run that has not begun")
+    return saved.simulation, saved.after
+
+
+def drive(source: Source, seconds: float) -> Repeat:
+    """Drive `source` on `seconds`, timing every state message's decision."""
+    simulation, after = start(source)
     manager = simulation.manager
     decide = manager.on_progress
     timed = Repeat([], array("d"))
@@ -56,7 +81,7 @@ def drive(state: Path, seconds: float) -> Repeat:
         return releases
 
     manager.on_progress = decide_timed  # type: ignore[method-assign]
-    simulation.run(until=saved.after + seconds)
+    simulation.run(until=after + seconds)
     return timed
 
 
@@ -77,10 +102,10 @@ def tail(cpu: Sequence[float]) -> dict[str, float]:
     }
 
 
-def measure(state: Path, seconds: float, repeat: int) -> dict[str, Any]:
-    """Drive `state` on `repeat` times and compare the repeats call by call."""
+def measure(source: Source, seconds: float, repeat: int) -> dict[str, Any]:
+    """Drive `source` on `repeat` times and compare the repeats call by call."""
     with multiprocessing.get_context("fork").Pool(min(2, repeat)) as pool:
-        repeats = pool.starmap(drive, [(state, seconds)] * repeat)
+        repeats = pool.starmap(drive, [(source, seconds)] * repeat)
     calls = repeats[0].calls
     if any(r.calls != calls for r in repeats):
         raise RuntimeError("the repeats made different calls: the run is not deterministic")
@@ -88,7 +113,7 @@ def measure(state: Path, seconds: float, repeat: int) -> dict[str, Any]:
     singles = [tail(r.cpu) for r in repeats]
     slowest = sorted(range(len(least)), key=least.__getitem__, reverse=True)[:5]
     return {
-        "state": str(state),
+        "source": str(source),
         "seconds": seconds,
         "repeats": repeat,
         "state_messages": len(least),
@@ -109,7 +134,9 @@ def measure(state: Path, seconds: float, repeat: int) -> dict[str, Any]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("state", type=Path, help="a run saved by bench.traffic --state")
+    parser.add_argument("state", type=Path, nargs="?", help="a run saved by bench.traffic --state")
+    parser.add_argument("--s2", metavar="INSTANCE", help="instead: an S2 instance from its start")
+    parser.add_argument("--delays", action="store_true", help="--s2: 5 %% of moves delayed")
     parser.add_argument("--seconds", type=float, default=300.0, help="simulated seconds")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--tag", default="", help="results file suffix")
@@ -117,7 +144,10 @@ def main() -> None:
     args = parser.parse_args()
     if args.repeat < 2:
         parser.error("--repeat: at least 2, to compare")
-    figures = measure(args.state, args.seconds, args.repeat)
+    if (args.state is None) == (args.s2 is None):
+        parser.error("give a saved run or --s2 INSTANCE")
+    source = args.state or S2Start(args.s2, args.delays)
+    figures = measure(source, args.seconds, args.repeat)
     for key, value in figures.items():
         print(f"  {key:26} {value}")
     if not args.no_write:

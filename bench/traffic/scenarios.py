@@ -21,6 +21,7 @@ from bench.traffic.long_run import LongRun
 from bench.traffic.maps import GridMap, LorrInstance, lorr, warehouse
 from traffic.des import SimConfig
 from traffic.layout import Layout
+from traffic.manager import TrafficManager
 from traffic.plans import Goal, ReleasePolicy
 
 POLICY = ReleasePolicy(max_steps=4, max_distance=4.0, braking_distance=1.0)
@@ -257,6 +258,51 @@ class LorrTasks:
         self.done[int(vehicle_id[1:])] += 1
 
 
+def s2_setup(
+    name: str,
+    *,
+    seed: int,
+    lifelong: bool = True,
+    switch_push: float | None = SWITCH_PUSH,
+    congestion: tuple[float, float] | None = S2_CONGESTION,
+    grid_rules: bool = S2_GRID_RULES,
+    delays: bool = False,
+) -> tuple[LorrInstance, TrafficManager, SimConfig]:
+    """One S2 instance's manager and simulation settings (`s2` runs them; the defaults are
+    the lifelong mode's)."""
+    instance = lorr(name)
+    layout = Layout.grid(instance.grid.free)
+    starts = [(node_id(instance.grid.cell(c)), 0.0) for c in instance.starts]
+    policy = ReleasePolicy(max_steps=S2_BASE, max_distance=float(S2_BASE))
+    manager = fleet_manager(
+        layout,
+        starts,
+        policy=policy,
+        max_expansions=20_000,
+        weight=S2_WEIGHT,
+        lifelong=lifelong,
+        refuge_penalty=S2_REFUGE_PENALTY,
+        replan_after=S2_REPLAN_AFTER if lifelong else 5.0,
+        improve_budget=S2_IMPROVE_BUDGET if lifelong else 0,
+        improve_slack=S2_IMPROVE_SLACK,
+        switch_push=switch_push,
+        congestion=congestion,
+        grid_rules=grid_rules,
+    )
+    config = SimConfig(
+        seed=seed,
+        delay_probability=0.05 if delays else 0.0,
+        # plain mode drives towards an unreachable goal; lifelong waits at its refuge (off
+        # the busy nodes) and retries, which did better on I-03 (1,373 vs 1,336 errands)
+        partial=not lifelong,
+        retry_after=1.0,
+        replan_budget=S2_REPLAN_BUDGET if lifelong else 8,
+        finish_at_goal=lifelong,
+        retry_on_the_way=lifelong and S2_RETRY_ON_THE_WAY,
+    )
+    return instance, manager, config
+
+
 def s2(
     *,
     quick: bool,
@@ -289,35 +335,14 @@ def s2(
         "delays": "5% of moves +5-30 s" if delays else "none",
     }
     for name in names:
-        instance = lorr(name)
-        layout = Layout.grid(instance.grid.free)
-        starts = [(node_id(instance.grid.cell(c)), 0.0) for c in instance.starts]
-        policy = ReleasePolicy(max_steps=S2_BASE, max_distance=float(S2_BASE))
-        manager = fleet_manager(
-            layout,
-            starts,
-            policy=policy,
-            max_expansions=20_000,
-            weight=S2_WEIGHT,
+        instance, manager, config = s2_setup(
+            name,
+            seed=seed,
             lifelong=lifelong,
-            refuge_penalty=S2_REFUGE_PENALTY,
-            replan_after=S2_REPLAN_AFTER if lifelong else 5.0,
-            improve_budget=S2_IMPROVE_BUDGET if lifelong else 0,
-            improve_slack=S2_IMPROVE_SLACK,
             switch_push=switch_push,
             congestion=congestion,
             grid_rules=grid_rules,
-        )
-        config = SimConfig(
-            seed=seed,
-            delay_probability=0.05 if delays else 0.0,
-            # plain mode drives towards an unreachable goal; lifelong waits at its refuge (off
-            # the busy nodes) and retries, which did better on I-03 (1,373 vs 1,336 errands)
-            partial=not lifelong,
-            retry_after=1.0,
-            replan_budget=S2_REPLAN_BUDGET if lifelong else 8,
-            finish_at_goal=lifelong,
-            retry_on_the_way=lifelong and S2_RETRY_ON_THE_WAY,
+            delays=delays,
         )
         steps = round(hours * 3600) if hours else instance.steps
         result = run(manager, LorrTasks(instance), float(steps), config)

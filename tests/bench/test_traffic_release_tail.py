@@ -17,6 +17,14 @@ def test_repeats_of_a_saved_run_make_the_same_state_messages(tmp_path: Path) -> 
     assert all(after < now <= after + 30.0 for _, _, now in first.calls)
 
 
+def test_an_s2_instance_is_driven_from_its_start_the_same_each_time() -> None:
+    source = release_tail.S2Start("MR23-I-04", delays=True)
+    first, second = (release_tail.drive(source, 20.0) for _ in range(2))
+    assert first.calls == second.calls
+    assert len(first.calls) > 100
+    assert all(0.0 < now <= 20.0 for _, _, now in first.calls)
+
+
 def test_the_tail_counts_what_took_longer_than_a_millisecond() -> None:
     cpu = array("d", [1e-5] * 9_998 + [2e-3, 5e-4])
     figures = release_tail.tail(cpu)
