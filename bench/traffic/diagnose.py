@@ -16,7 +16,14 @@ import statistics
 import time
 from typing import Any
 
-from bench.traffic.fleet import WarehouseTasks, fleet_manager, ghost, node_id, open_work
+from bench.traffic.fleet import (
+    WarehouseTasks,
+    fleet_manager,
+    ghost,
+    node_id,
+    open_work,
+    percentile,
+)
 from bench.traffic.maps import warehouse
 from bench.traffic.scenarios import REASSIGN_AFTER, S3_POLICY, S3_QUICK_SEARCH
 from traffic.des import SimConfig, Simulation, free_flow_time
@@ -45,11 +52,6 @@ def _setup(
     return m, tasks, starts
 
 
-def _pct(values: list[float], q: float) -> float:
-    ordered = sorted(values)
-    return ordered[min(len(ordered) - 1, int(len(ordered) * q / 100))] if ordered else 0.0
-
-
 def wave(vehicles: int, fallback: float | None) -> None:
     """Plan every vehicle's first order at t = 0 and compare with free flow."""
     m, tasks, starts = _setup(vehicles, fallback)
@@ -71,8 +73,8 @@ def wave(vehicles: int, fallback: float | None) -> None:
         waits.append(plan.arrive[-1] + goals[-1].dwell - free)
     print(
         f"planned wait mean {statistics.fmean(waits):.1f} median {statistics.median(waits):.1f}"
-        f" p95 {_pct(waits, 95):.1f} s; failed {fails}; plan CPU p50 "
-        f"{_pct(cpu, 50) * 1e3:.1f} p95 {_pct(cpu, 95) * 1e3:.1f} ms"
+        f" p95 {percentile(waits, 95):.1f} s; failed {fails}; plan CPU p50 "
+        f"{percentile(cpu, 50) * 1e3:.1f} p95 {percentile(cpu, 95) * 1e3:.1f} ms"
     )
 
 
@@ -140,8 +142,8 @@ def run(args: argparse.Namespace) -> None:
         f"{ghost_work:.1f}): rho_work {work / ghost_work:.3f}; moves {stats.moves}; stopped "
         f"{sum(stops) / args.vehicles:.0f} s per vehicle, {len(stops)} stops; collisions "
         f"{stats.collisions}, wait cycles {stats.wait_cycles}, stalls {stats.stalls}; plan CPU"
-        f" p95 {_pct(stats.plan_cpu_seconds, 95) * 1e3:.1f} ms; tick CPU p50 "
-        f"{_pct(stats.replan_cpu_seconds, 50) * 1e3:.0f} ms; {wall:.0f} s wall"
+        f" p95 {percentile(stats.plan_cpu_seconds, 95) * 1e3:.1f} ms; tick CPU p50 "
+        f"{percentile(stats.replan_cpu_seconds, 50) * 1e3:.0f} ms; {wall:.0f} s wall"
     )
     total = sum(sim.causes.values()) or 1.0
     for cause, seconds in sorted(sim.causes.items(), key=lambda item: -item[1]):

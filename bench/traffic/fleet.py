@@ -298,9 +298,9 @@ def figures(result: Run, *, sample: int = 1500, seed: int = 0) -> dict[str, Any]
         "tasks_finished": len(tasks),
         "throughput_per_hour": round(len(tasks) / hours, 1) if hours else 0.0,
         "wait_per_order_mean_s": _round(statistics.fmean(waits) if waits else 0.0),
-        "wait_per_order_p95_s": _round(_pct(waits, 95)),
+        "wait_per_order_p95_s": _round(percentile(waits, 95)),
         "decision_point_stop_mean_s": _round(statistics.fmean(stats.waits) if stats.waits else 0),
-        "decision_point_stop_p95_s": _round(_pct(stats.waits, 95)),
+        "decision_point_stop_p95_s": _round(percentile(stats.waits, 95)),
         "deadlocks_wait_cycles": stats.wait_cycles,
         "deadlocks_stalls": stats.stalls,
         "waits_over_300s_behind_a_driving_vehicle": stats.long_waits,
@@ -309,16 +309,16 @@ def figures(result: Run, *, sample: int = 1500, seed: int = 0) -> dict[str, Any]
         "reassigned_orders": stats.reassigned,
         "moves": stats.moves,
         "delayed_moves": stats.delays,
-        "plan_ms_p50": _round(_pct(plan_ms, 50)),
-        "plan_ms_p95": _round(_pct(plan_ms, 95)),
+        "plan_ms_p50": _round(percentile(plan_ms, 50)),
+        "plan_ms_p95": _round(percentile(plan_ms, 95)),
         "plan_ms_max": _round(max(plan_ms, default=0.0)),
         # histograms (1 % buckets, `traffic.des_records.Timings`): a state message each
         "release_us_p50": _round(release_us.percentile(50) * 1e6),
         "release_us_p95": _round(release_us.percentile(95) * 1e6),
         "release_us_p99": _round(release_us.percentile(99) * 1e6),
         "release_us_max": _round(release_us.max * 1e6),
-        "plan_cpu_ms_p50": _round(_pct(plan_cpu_ms, 50)),
-        "plan_cpu_ms_p95": _round(_pct(plan_cpu_ms, 95)),
+        "plan_cpu_ms_p50": _round(percentile(plan_cpu_ms, 50)),
+        "plan_cpu_ms_p95": _round(percentile(plan_cpu_ms, 95)),
         "plan_cpu_ms_max": _round(max(plan_cpu_ms, default=0.0)),
         "release_cpu_us_p95": _round(release_cpu_us.percentile(95) * 1e6),
         "release_cpu_us_p99": _round(release_cpu_us.percentile(99) * 1e6),
@@ -326,8 +326,8 @@ def figures(result: Run, *, sample: int = 1500, seed: int = 0) -> dict[str, Any]
         "release_cpu_us_max": _round(release_cpu_us.max * 1e6),
         # the target is 1 ms per state message: how many took longer (CPU, to 1 %)
         "release_cpu_over_1ms": release_cpu_us.count_over(1e-3),
-        "tick_cpu_ms_p50": _round(_pct(tick_cpu_ms, 50)),
-        "tick_cpu_ms_p95": _round(_pct(tick_cpu_ms, 95)),
+        "tick_cpu_ms_p50": _round(percentile(tick_cpu_ms, 50)),
+        "tick_cpu_ms_p95": _round(percentile(tick_cpu_ms, 95)),
         "ticks": len(tick_cpu_ms),
         # per simulated second, whatever the tick interval (SimConfig.tick_every)
         "tick_cpu_s_per_simulated_s": _round(sum(tick_cpu_ms) / 1e3 / max(result.seconds, 1e-9)),
@@ -339,7 +339,8 @@ def figures(result: Run, *, sample: int = 1500, seed: int = 0) -> dict[str, Any]
     }
 
 
-def _pct(values: Sequence[float], q: float) -> float:
+def percentile(values: Sequence[float], q: float) -> float:
+    """The sample of rank ⌊len·q/100⌋ in ascending order (0.0 for none)."""
     if not values:
         return 0.0
     ordered = sorted(values)

@@ -24,6 +24,7 @@ from typing import Any
 
 from bench.results import write
 from bench.traffic import scenarios
+from bench.traffic.fleet import percentile
 from bench.traffic.long_run import load
 from traffic.des import Simulation
 from traffic.plans import Release
@@ -90,7 +91,7 @@ def tail(cpu: Sequence[float]) -> dict[str, float]:
     ordered = sorted(cpu)
 
     def pct(q: float) -> float:
-        return round(ordered[min(len(ordered) - 1, int(len(ordered) * q / 100))] * 1e6, 1)
+        return round(percentile(ordered, q) * 1e6, 1)  # (sorting sorted values is linear)
 
     return {
         "p50_us": pct(50),
